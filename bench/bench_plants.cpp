@@ -1,0 +1,92 @@
+// Speed of the plants (Google Benchmark; figures, never test assertions).
+//   BM_BevStep/<solver>:  one fixed step of the map-based EV (NEDC, h = 1 ms): stepper.advance
+//   BM_BevRun/<solver>:   a whole NEDC run through the batch runner (outputs and metrics every
+//                         step, rows every 100); counters: ns_per_step, realtime_factor
+//   BM_OneFlangeStep:     one step of the TestMBOneFlange rig
+#include <benchmark/benchmark.h>
+
+#include "hil/config.hpp"
+#include "hil/runner.hpp"
+#include "plant/bev_plant.hpp"
+#include "plant/drive_rigs.hpp"
+#include "solvers/event_stepper.hpp"
+
+namespace {
+
+using namespace ehpt;
+
+hil::Scenario load(const char* name) {
+  hil::Scenario sc;
+  std::vector<std::string> errors;
+  if (!hil::load_scenario(std::string(EHPT_SOURCE_DIR) + "/scenarios/" + name, {}, sc, errors)) std::abort();
+  return sc;
+}
+
+template <class Integrator>
+void BM_BevStep(benchmark::State& state) {
+  const hil::Scenario sc = load("ev_nedc.toml");
+  const plant::BevPlant plant(std::get<plant::BevParams>(sc.plant));
+  Integrator integrator(plant);
+  solvers::EventStepper<plant::BevPlant, Integrator> stepper(plant, integrator, 0.0, 1e-3);
+  plant::BevPlant::State x = plant.initial_state();
+  plant::BevPlant::Modes m = plant.initial_modes(x);
+  std::int64_t n = 0;
+  for (auto _ : state) {
+    stepper.advance(n, x, m, {});
+    if (++n == 1184000) {  // wrap around the cycle
+      n = 0;
+      x = plant.initial_state();
+      m = plant.initial_modes(x);
+    }
+    benchmark::DoNotOptimize(x);
+  }
+  state.counters["ns_per_step"] = benchmark::Counter(static_cast<double>(state.iterations()),
+                                                     benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["realtime_factor"] =
+      benchmark::Counter(1e-3 * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_BevStep<solvers::Rk4<plant::BevPlant>>)->Name("BM_BevStep/rk4");
+BENCHMARK(BM_BevStep<solvers::ImplicitEuler<plant::BevPlant>>)->Name("BM_BevStep/implicit-euler");
+
+template <class Integrator>
+void BM_BevRun(benchmark::State& state) {
+  const hil::Scenario sc = load("ev_nedc.toml");
+  const plant::BevPlant plant(std::get<plant::BevParams>(sc.plant));
+  std::int64_t steps = 0;
+  for (auto _ : state) {
+    hil::Runner<plant::BevPlant, Integrator> runner(plant, 1e-3, sc.solver.steps, 100, {0, 1, 2}, sc.solver.steps);
+    runner.run();
+    steps += runner.step_index();
+    benchmark::DoNotOptimize(runner.state());
+  }
+  state.counters["ns_per_step"] =
+      benchmark::Counter(static_cast<double>(steps), benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["realtime_factor"] = benchmark::Counter(1e-3 * static_cast<double>(steps), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_BevRun<solvers::Rk4<plant::BevPlant>>)->Name("BM_BevRun_nedc/rk4")->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_BevRun<solvers::ImplicitEuler<plant::BevPlant>>)
+    ->Name("BM_BevRun_nedc/implicit-euler")
+    ->Unit(benchmark::kMillisecond);
+
+void BM_OneFlangeStep(benchmark::State& state) {
+  const hil::Scenario sc = load("one_flange_test.toml");
+  const plant::DriveRig rig(std::get<plant::DriveRigParams>(sc.plant));
+  solvers::Rk4<plant::DriveRig> rk4(rig);
+  solvers::EventStepper<plant::DriveRig, solvers::Rk4<plant::DriveRig>> stepper(rig, rk4, 0.0, 1e-3);
+  plant::DriveRig::State x = rig.initial_state();
+  plant::DriveRig::Modes m{};
+  std::int64_t n = 0;
+  for (auto _ : state) {
+    stepper.advance(n, x, m, {});
+    if (++n == 50000) {
+      n = 0;
+      x = rig.initial_state();
+    }
+    benchmark::DoNotOptimize(x);
+  }
+}
+BENCHMARK(BM_OneFlangeStep);
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,221 @@
+#include "hil/batch.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <ostream>
+
+#include "hil/runner.hpp"
+#include "io/number_format.hpp"
+#include "plant/bev_plant.hpp"
+#include "plant/drive_rigs.hpp"
+#include "solvers/integrators.hpp"
+
+namespace ehpt::hil {
+
+std::string fault_text(unsigned fault) {
+  std::string s;
+  const auto add = [&](unsigned bit, const char* text) {
+    if (fault & bit) s += (s.empty() ? "" : ", ") + std::string(text);
+  };
+  add(plant::kFaultSocWindow, "SOC left [soc_min, soc_max]");
+  add(plant::kFaultCellCurrent, "cell current reached cell_current_max_A");
+  add(plant::kFaultPowerInfeasible, "the drive asked for more power than the battery can give");
+  add(plant::kFaultNonFinite, "non-finite state (NaN or Inf)");
+  return s;
+}
+
+namespace {
+
+constexpr std::int64_t kChunkSteps = 50000;
+
+template <class Plant, class Integrator>
+BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions& opt, std::ostream& log) {
+  BatchResult res;
+  const auto signals = plant.signals();
+  std::vector<int> columns;
+  if (sc.output.signals.empty()) {
+    for (std::size_t i = 0; i < signals.size(); ++i) columns.push_back(static_cast<int>(i));
+  } else {
+    for (const std::string& name : sc.output.signals) {
+      for (std::size_t i = 0; i < signals.size(); ++i) {
+        if (signals[i].name == name) columns.push_back(static_cast<int>(i));
+      }
+    }
+  }
+
+  io::OutputDir dir;
+  std::string error;
+  if (!dir.open(opt.out_dir, error)) {
+    log << "error: " << error << "\n";
+    res.exit_code = 1;
+    return res;
+  }
+  const std::string csv_path = dir.file("timeseries.csv");
+  std::ofstream csv(csv_path, std::ios::binary);
+  std::string text;
+  for (std::size_t c = 0; c < columns.size(); ++c) {
+    text += (c ? "," : "") + std::string(signals[static_cast<std::size_t>(columns[c])].name);
+  }
+  text += "\n";
+
+  Runner<Plant, Integrator> runner(plant, sc.solver.step_s, sc.solver.steps, sc.output.decimation, columns,
+                                   kChunkSteps);
+  typename Plant::Outputs y0 = runner.last_outputs();
+  const auto wall_start = std::chrono::steady_clock::now();
+  double run_wall_s = 0.0;
+  bool interrupted = false;
+  for (;;) {
+    const auto t0 = std::chrono::steady_clock::now();
+    runner.run(opt.stop);
+    run_wall_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    // between chunks: write rows and report progress
+    const auto rows = runner.rows();
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      io::append_number(text, rows[i]);
+      text += (i + 1) % columns.size() == 0 ? '\n' : ',';
+    }
+    runner.clear_rows();
+    csv << text;
+    text.clear();
+    if (opt.progress) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "\r[%3d%%] t = %.1f s of %.1f s", static_cast<int>(100.0 * runner.step_index() / std::max<std::int64_t>(1, runner.total_steps())),
+                    runner.time_s(), sc.solver.duration_s);
+      log << buf << std::flush;
+    }
+    if (runner.finished()) break;
+    if (opt.stop != nullptr && opt.stop->load()) {
+      interrupted = true;
+      break;
+    }
+  }
+  if (opt.progress) log << "\n";
+  csv.flush();
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+
+  const RunStats& st = runner.stats();
+  const typename Plant::Outputs& y1 = runner.last_outputs();
+  const plant::EnergyAudit audit = plant.audit(runner.initial_state(), runner.state());
+  const double sim_s = runner.time_s();
+
+  io::JsonObject& j = res.summary;
+  std::string status = "ok";
+  if (st.fault != 0) {
+    status = "fault";
+    res.exit_code = 3;
+  } else if (interrupted) {
+    status = "interrupted";
+    res.exit_code = 130;
+  }
+  j.text("status", status);
+  if (st.fault != 0) {
+    j.text("fault", fault_text(st.fault) + " at t = " + io::number_text(st.fault_time_s) + " s (step " +
+                        std::to_string(st.fault_step) + ")");
+  }
+  j.text("scenario", sc.name);
+  j.text("description", sc.description);
+  j.text("vehicle_file", sc.vehicle_path);
+  j.text("cycle_file", sc.cycle_path);
+  j.text("solver", solver_name(sc.solver.kind));
+  j.number("step_s", sc.solver.step_s);
+  j.number("duration_s", sim_s);
+  j.integer("steps", st.steps_done);
+  j.integer("events", st.events);
+  j.integer("chattering_steps", st.chattering_steps);
+  j.integer("newton_failures", st.newton_failures);
+  j.integer("output_decimation", sc.output.decimation);
+
+  double distance_m = 0.0;
+  if constexpr (requires { y1.distance_m; }) distance_m = y1.distance_m;
+  j.number("distance_m", distance_m);
+  const double rms_kmh = st.speed_samples > 0 ? std::sqrt(st.speed_error_sq_sum / st.speed_samples) : NAN;
+  if (st.has_speed) {
+    j.number("speed_error_rms_kmh", rms_kmh);
+    j.number("speed_error_max_kmh", st.speed_error_max_kmh);
+    j.number("locked_time_s", st.locked_time_s);
+  } else {
+    j.null("speed_error_rms_kmh");
+    j.null("speed_error_max_kmh");
+  }
+  j.number("battery_energy_J", audit.battery_out_J);
+  j.number("battery_Wh_per_km", distance_m > 0.0 ? audit.battery_out_J / 3600.0 / (distance_m / 1000.0) : NAN);
+  if constexpr (requires { y0.soc; }) {
+    j.number("soc_start", y0.soc);
+    j.number("soc_end", y1.soc);
+  } else {
+    j.null("soc_start");
+    j.null("soc_end");
+  }
+  j.number("fuel_g", 0.0);
+  j.number("fuel_L_per_100km", 0.0);
+  const double relative = std::abs(audit.residual_J) / std::max(std::abs(audit.sources_J), 1.0);
+  j.number("energy_balance_residual_J", audit.residual_J);
+  j.number("energy_balance_relative", relative);
+  io::JsonObject terms;
+  for (const auto& [k, v] : audit.terms) terms.number(k, v);
+  j.object("energy_audit", terms);
+  j.number("wall_time_s", wall_s);
+  j.number("run_wall_time_s", run_wall_s);
+  j.number("realtime_factor", run_wall_s > 0.0 ? sim_s / run_wall_s : NAN);
+  j.number("ns_per_step", st.steps_done > 0 ? 1e9 * run_wall_s / st.steps_done : NAN);
+
+  // human-readable lines
+  char buf[256];
+  std::string& s = res.summary_text;
+  std::snprintf(buf, sizeof buf, "scenario      %s (%s, h = %g s, %lld steps, %lld events)\n", sc.name.c_str(),
+                solver_name(sc.solver.kind), sc.solver.step_s, static_cast<long long>(st.steps_done),
+                static_cast<long long>(st.events));
+  s += buf;
+  if (st.has_speed) {
+    std::snprintf(buf, sizeof buf, "distance      %.4f km\nspeed error   rms %.3f km/h, max %.3f km/h\n", distance_m / 1000.0,
+                  rms_kmh, st.speed_error_max_kmh);
+    s += buf;
+  }
+  if constexpr (requires { y0.soc; }) {
+    std::snprintf(buf, sizeof buf, "battery       %.1f Wh out, %.1f Wh/km, SOC %.4f -> %.4f\n",
+                  audit.battery_out_J / 3600.0,
+                  distance_m > 0 ? audit.battery_out_J / 3600.0 / (distance_m / 1000.0) : 0.0, y0.soc, y1.soc);
+    s += buf;
+  }
+  std::snprintf(buf, sizeof buf, "energy audit  residual %.3g J (relative %.2g)\n", audit.residual_J, relative);
+  s += buf;
+  std::snprintf(buf, sizeof buf, "speed         %.0f x real time (%.1f ns per step, %.3f s wall)\n",
+                run_wall_s > 0 ? sim_s / run_wall_s : 0.0, st.steps_done > 0 ? 1e9 * run_wall_s / st.steps_done : 0.0,
+                wall_s);
+  s += buf;
+  if (st.fault != 0) s += "FAULT         " + fault_text(st.fault) + " at t = " + io::number_text(st.fault_time_s) + " s\n";
+  if (interrupted) s += "INTERRUPTED   at t = " + io::number_text(sim_s) + " s; outputs so far kept\n";
+
+  if (!csv) {
+    log << "error: " << csv_path << ": write failed\n";
+    res.exit_code = 1;
+    return res;
+  }
+  csv.close();
+  if (!io::write_file_atomically(dir.file("summary.json"), j.str() + "\n", error) || !dir.commit(error)) {
+    log << "error: " << error << "\n";
+    res.exit_code = 1;
+  }
+  return res;
+}
+
+template <class Plant>
+BatchResult run_with_solver(const Scenario& sc, const Plant& plant, const BatchOptions& opt, std::ostream& log) {
+  if (sc.solver.kind == SolverKind::kRk4) return run_plant<Plant, solvers::Rk4<Plant>>(sc, plant, opt, log);
+  return run_plant<Plant, solvers::ImplicitEuler<Plant>>(sc, plant, opt, log);
+}
+
+}  // namespace
+
+BatchResult run_batch(const Scenario& sc, const BatchOptions& opt, std::ostream& log) {
+  if (const auto* p = std::get_if<plant::BevParams>(&sc.plant)) {
+    const plant::BevPlant plant(*p);
+    return run_with_solver(sc, plant, opt, log);
+  }
+  const plant::DriveRig plant(std::get<plant::DriveRigParams>(sc.plant));
+  return run_with_solver(sc, plant, opt, log);
+}
+
+}  // namespace ehpt::hil

@@ -1,0 +1,613 @@
+#include "hil/config.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <set>
+#include <sstream>
+
+#include <toml++/toml.h>
+
+#include "io/csv_table.hpp"
+#include "io/number_format.hpp"
+
+namespace fs = std::filesystem;
+
+namespace ehpt::hil {
+
+const char* solver_name(SolverKind k) { return k == SolverKind::kRk4 ? "rk4" : "implicit-euler"; }
+
+namespace {
+
+using plant::Problems;
+
+std::string node_text(const toml::node& n) {
+  std::ostringstream s;
+  if (n.is_table()) return "(a table)";
+  if (n.is_array()) return "(an array)";
+  n.visit([&](const auto& v) { s << v; });
+  return s.str();
+}
+
+std::string location(const toml::node* n, const std::string& fallback) {
+  if (n == nullptr || !n->source().path) return fallback;
+  const std::string& p = *n->source().path;
+  if (p.rfind("--set", 0) == 0) return p;
+  return p + ":" + std::to_string(n->source().begin.line);
+}
+
+// Collects messages and remembers where each field's value came from, so that problems
+// found later by plant/ validate() can be given a file and line.
+struct Context {
+  std::vector<std::string> errors;
+  std::map<std::string, std::string> where;                // field -> "file:line"
+  std::map<std::string, std::pair<std::string, std::vector<int>>> tables;  // field -> csv, row lines
+  std::set<std::string> failed_tables;  // fields whose file could not be read: no follow-on problems
+
+  void error(const std::string& loc, const std::string& field, const std::string& value,
+             const std::string& expected) {
+    errors.push_back(loc + ": " + field + (value.empty() ? "" : " = " + value) + ": " + expected);
+  }
+};
+
+// A view of one table through several layers, highest priority first (--set overrides,
+// the scenario's [vehicle] table, the vehicle file). Unknown keys in any layer are errors.
+class Reader {
+ public:
+  Reader(std::vector<const toml::table*> layers, std::string prefix, std::string file, Context& ctx)
+      : layers_(std::move(layers)), prefix_(std::move(prefix)), file_(std::move(file)), ctx_(ctx) {}
+
+  std::string field(std::string_view key) const { return prefix_.empty() ? std::string(key) : prefix_ + "." + std::string(key); }
+
+  const toml::node* find(std::string_view key) {
+    used_.insert(std::string(key));
+    for (const toml::table* t : layers_) {
+      if (t == nullptr) continue;
+      if (const toml::node* n = t->get(key)) {
+        ctx_.where[field(key)] = location(n, file_);
+        return n;
+      }
+    }
+    ctx_.where[field(key)] = file_ + " (default)";
+    return nullptr;
+  }
+  bool has(std::string_view key) const {
+    for (const toml::table* t : layers_) {
+      if (t != nullptr && t->get(key) != nullptr) return true;
+    }
+    return false;
+  }
+
+  std::optional<double> opt_number(std::string_view key) {
+    const toml::node* n = find(key);
+    if (n == nullptr) return std::nullopt;
+    if (auto v = n->value<double>()) return *v;  // integers convert too
+    ctx_.error(location(n, file_), field(key), node_text(*n), "must be a number");
+    return std::nullopt;
+  }
+  double number(std::string_view key, double fallback) { return opt_number(key).value_or(fallback); }
+  double required_number(std::string_view key) {
+    if (!has(key)) {
+      ctx_.error(file_, field(key), "", "missing (required number)");
+      find(key);
+      return std::nan("");
+    }
+    return opt_number(key).value_or(std::nan(""));
+  }
+  std::int64_t integer(std::string_view key, std::int64_t fallback) {
+    const toml::node* n = find(key);
+    if (n == nullptr) return fallback;
+    if (auto v = n->value_exact<std::int64_t>()) return *v;
+    ctx_.error(location(n, file_), field(key), node_text(*n), "must be a whole number");
+    return fallback;
+  }
+  bool flag(std::string_view key, bool fallback) {
+    const toml::node* n = find(key);
+    if (n == nullptr) return fallback;
+    if (auto v = n->value_exact<bool>()) return *v;
+    ctx_.error(location(n, file_), field(key), node_text(*n), "must be true or false");
+    return fallback;
+  }
+  std::string text(std::string_view key, const std::string& fallback) {
+    const toml::node* n = find(key);
+    if (n == nullptr) return fallback;
+    if (auto v = n->value_exact<std::string>()) return *v;
+    ctx_.error(location(n, file_), field(key), node_text(*n), "must be a string");
+    return fallback;
+  }
+  // A file name, relative to the folder of the file that gave it.
+  std::string path(std::string_view key, bool required) {
+    const toml::node* n = find(key);
+    if (n == nullptr) {
+      if (required) ctx_.error(file_, field(key), "", "missing (required file name)");
+      return "";
+    }
+    auto v = n->value_exact<std::string>();
+    if (!v) {
+      ctx_.error(location(n, file_), field(key), node_text(*n), "must be a file name (string)");
+      return "";
+    }
+    fs::path p(*v);
+    if (p.is_relative() && n->source().path && n->source().path->rfind("--set", 0) != 0) {
+      p = fs::path(*n->source().path).parent_path() / p;
+    }
+    return p.lexically_normal().string();
+  }
+  std::vector<std::string> strings(std::string_view key) {
+    std::vector<std::string> out;
+    const toml::node* n = find(key);
+    if (n == nullptr) return out;
+    const toml::array* a = n->as_array();
+    if (a == nullptr) {
+      ctx_.error(location(n, file_), field(key), node_text(*n), "must be an array of strings");
+      return out;
+    }
+    for (const toml::node& e : *a) {
+      if (auto s = e.value_exact<std::string>()) {
+        out.push_back(*s);
+      } else {
+        ctx_.error(location(&e, file_), field(key), node_text(e), "must be a string");
+      }
+    }
+    return out;
+  }
+
+  Reader sub(std::string_view key) {
+    used_.insert(std::string(key));
+    std::vector<const toml::table*> layers;
+    for (const toml::table* t : layers_) {
+      const toml::node* n = t == nullptr ? nullptr : t->get(key);
+      if (n != nullptr && !n->is_table()) {
+        ctx_.error(location(n, file_), field(key), node_text(*n), "must be a table");
+        n = nullptr;
+      }
+      layers.push_back(n == nullptr ? nullptr : n->as_table());
+    }
+    return Reader(std::move(layers), field(key), file_, ctx_);
+  }
+
+  // Reports every key no reader asked for.
+  void finish() {
+    for (const toml::table* t : layers_) {
+      if (t == nullptr) continue;
+      for (const auto& [k, n] : *t) {
+        if (used_.count(std::string(k.str())) == 0) {
+          ctx_.error(location(&n, file_), field(k.str()), "", "unknown key");
+        }
+      }
+    }
+  }
+
+ private:
+  std::vector<const toml::table*> layers_;
+  std::string prefix_, file_;
+  Context& ctx_;
+  std::set<std::string> used_;
+};
+
+bool parse_toml(const std::string& path, toml::table& out, Context& ctx) {
+  try {
+    out = toml::parse_file(path);
+    return true;
+  } catch (const toml::parse_error& e) {
+    const auto& src = e.source();
+    ctx.errors.push_back(path + ":" + std::to_string(src.begin.line) + ": TOML syntax: " +
+                         std::string(e.description()));
+  } catch (const std::exception& e) {
+    ctx.errors.push_back(path + ": cannot read: " + e.what());
+  }
+  return false;
+}
+
+std::string toml_quote(const std::string& v) {
+  std::string out = "\"";
+  for (char c : v) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out + "\"";
+}
+
+// "a.b.c=value": the value is parsed as TOML (number, bool, quoted string, array), or taken as text.
+bool parse_override(const std::string& text, toml::table& out, Context& ctx) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos || eq == 0) {
+    ctx.errors.push_back("--set " + text + ": expected key=value, e.g. --set vehicle.battery.soc_initial=0.6");
+    return false;
+  }
+  const std::string key = text.substr(0, eq);
+  const std::string value = text.substr(eq + 1);
+  const std::string label = "--set " + text;
+  try {
+    out = toml::parse(key + " = " + value, label);
+  } catch (const toml::parse_error&) {
+    try {
+      out = toml::parse(key + " = " + toml_quote(value), label);
+    } catch (const toml::parse_error& e) {
+      ctx.errors.push_back(label + ": cannot parse: " + std::string(e.description()));
+      return false;
+    }
+  }
+  return true;
+}
+
+// ---- CSV-backed tables ------------------------------------------------------------------
+
+bool read_table(const std::string& path, io::CsvTable& t, Context& ctx) {
+  return io::read_csv_table(path, t, ctx.errors);
+}
+
+// Cycle: time_s and speed_kmh or speed_m_s; other columns ignored.
+plant::Table1d load_cycle(const std::string& path, const std::string& field, Context& ctx) {
+  io::CsvTable t;
+  ctx.failed_tables.insert(field);
+  if (!read_table(path, t, ctx)) return {};
+  const int ti = t.column_index("time_s");
+  int vi = t.column_index("speed_m_s");
+  double scale = 1.0;
+  if (vi < 0) {
+    vi = t.column_index("speed_kmh");
+    scale = 1.0 / 3.6;
+  }
+  if (ti < 0 || vi < 0) {
+    ctx.errors.push_back(path + ":1: header: expected a time_s column and a speed_kmh or speed_m_s column");
+    return {};
+  }
+  std::vector<double> v = t.columns[static_cast<std::size_t>(vi)];
+  for (double& s : v) s *= scale;
+  ctx.tables[field] = {path, t.lines};
+  ctx.failed_tables.erase(field);
+  // end value held: a cycle does not extrapolate past its last row
+  return plant::Table1d(t.columns[static_cast<std::size_t>(ti)], std::move(v), plant::Extrapolation::kHold);
+}
+
+plant::Table1d load_curve(const std::string& path, const std::string& field, Context& ctx) {
+  io::CsvTable t;
+  ctx.failed_tables.insert(field);
+  if (!read_table(path, t, ctx)) return {};
+  if (t.header.size() < 2) {
+    ctx.errors.push_back(path + ":1: header: expected two columns (x, y)");
+    return {};
+  }
+  ctx.tables[field] = {path, t.lines};
+  ctx.failed_tables.erase(field);
+  return plant::Table1d(t.columns[0], t.columns[1], plant::Extrapolation::kHold);
+}
+
+// Tidy 2-D map "u1, u2, value" sorted by u1 then u2 (data/README.md) -> grid.
+plant::Table2d load_map(const std::string& path, const std::string& field, Context& ctx) {
+  io::CsvTable t;
+  ctx.failed_tables.insert(field);
+  if (!read_table(path, t, ctx)) return {};
+  if (t.header.size() != 3) {
+    ctx.errors.push_back(path + ":1: header: expected three columns (row axis, column axis, value)");
+    return {};
+  }
+  std::vector<double> u1, u2;
+  for (std::size_t r = 0; r < t.rows(); ++r) {
+    const double a = t.columns[0][r], b = t.columns[1][r];
+    if (u1.empty() || a != u1.back()) {
+      if (!u1.empty() && !(a > u1.back())) {
+        ctx.errors.push_back(path + ":" + std::to_string(t.lines[r]) + ": " + field + " " + t.header[0] + " = " +
+                             io::number_text(a) + ": row axis must be strictly increasing");
+        return {};
+      }
+      u1.push_back(a);
+    }
+    if (u1.size() == 1) {
+      if (!u2.empty() && !(b > u2.back())) {
+        ctx.errors.push_back(path + ":" + std::to_string(t.lines[r]) + ": " + field + " " + t.header[1] + " = " +
+                             io::number_text(b) + ": column axis must be strictly increasing");
+        return {};
+      }
+      u2.push_back(b);
+    }
+  }
+  if (t.rows() != u1.size() * u2.size()) {
+    ctx.errors.push_back(path + ": " + field + ": " + std::to_string(t.rows()) + " rows, a full " +
+                         std::to_string(u1.size()) + " x " + std::to_string(u2.size()) + " grid needs " +
+                         std::to_string(u1.size() * u2.size()));
+    return {};
+  }
+  for (std::size_t r = 0; r < t.rows(); ++r) {
+    if (t.columns[0][r] != u1[r / u2.size()] || t.columns[1][r] != u2[r % u2.size()]) {
+      ctx.errors.push_back(path + ":" + std::to_string(t.lines[r]) + ": " + field +
+                           ": grid point out of order (rows must be sorted by the first column, then the second)");
+      return {};
+    }
+  }
+  ctx.where[field] = path;
+  ctx.failed_tables.erase(field);
+  return plant::Table2d(std::move(u1), std::move(u2), t.columns[2]);
+}
+
+// ---- component readers ------------------------------------------------------------------
+
+plant::MapDriveParams read_drive(Reader r, Context& ctx) {
+  plant::MapDriveParams p;
+  p.torque_max_Nm = r.required_number("torque_max_Nm");
+  p.power_max_W = r.required_number("power_max_W");
+  p.speed_max_rad_s = r.required_number("speed_max_rad_s");
+  p.inertia_kgm2 = r.required_number("inertia_kgm2");
+  p.limit_ramp_fraction = r.number("limit_ramp_fraction", p.limit_ramp_fraction);
+  const std::string model = r.text("loss_model", "ideal");
+  if (model == "ideal") {
+    p.loss_model = plant::DriveLossModel::kIdeal;
+  } else if (model == "map") {
+    p.loss_model = plant::DriveLossModel::kMap;
+    const std::string map = r.path("efficiency_map", true);
+    if (!map.empty()) p.efficiency_map = load_map(map, r.field("efficiency_map"), ctx);
+  } else if (model == "formula") {
+    p.loss_model = plant::DriveLossModel::kFormula;
+    Reader f = r.sub("loss_formula");
+    p.loss_formula.a = f.number("a", p.loss_formula.a);
+    p.loss_formula.b_t = f.number("b_t", p.loss_formula.b_t);
+    p.loss_formula.b_w = f.number("b_w", p.loss_formula.b_w);
+    p.loss_formula.b_p = f.number("b_p", p.loss_formula.b_p);
+    f.finish();
+  } else {
+    ctx.error(ctx.where[r.field("loss_model")], r.field("loss_model"), "\"" + model + "\"",
+              "must be \"ideal\", \"map\" or \"formula\"");
+  }
+  if (model != "map" && r.has("efficiency_map")) r.path("efficiency_map", false);  // allowed, unused
+  if (model != "formula" && r.has("loss_formula")) r.sub("loss_formula");
+  r.finish();
+  return p;
+}
+
+plant::BatteryRcParams read_battery(Reader r) {
+  plant::BatteryRcParams p;
+  p.cell_capacity_Ah = r.number("cell_capacity_Ah", p.cell_capacity_Ah);
+  p.cell_emf_min_V = r.number("cell_emf_min_V", p.cell_emf_min_V);
+  p.cell_emf_max_V = r.number("cell_emf_max_V", p.cell_emf_max_V);
+  p.soc_min = r.number("soc_min", p.soc_min);
+  p.soc_max = r.number("soc_max", p.soc_max);
+  p.soc_initial = r.number("soc_initial", p.soc_initial);
+  p.cell_current_max_A = r.opt_number("cell_current_max_A");
+  p.r0_cell_Ohm = r.opt_number("r0_cell_Ohm");
+  p.r1_cell_Ohm = r.opt_number("r1_cell_Ohm");
+  p.c1_cell_F = r.opt_number("c1_cell_F");
+  p.efficiency = r.number("efficiency", p.efficiency);
+  p.cell_current_efficiency_A = r.opt_number("cell_current_efficiency_A");
+  p.cells_series = static_cast<int>(r.integer("cells_series", p.cells_series));
+  p.strings_parallel = static_cast<int>(r.integer("strings_parallel", p.strings_parallel));
+  r.finish();
+  return p;
+}
+
+plant::RoadLoadParams read_road(Reader r, Context& ctx) {
+  plant::RoadLoadParams p;
+  const std::string form = r.text("form", "coefficients");
+  if (form == "coefficients") {
+    p.form = plant::RoadLoadForm::kCoefficients;
+    p.rolling_coefficient = r.required_number("rolling_coefficient");
+    p.air_density_kg_m3 = r.number("air_density_kg_m3", p.air_density_kg_m3);
+    p.frontal_area_m2 = r.required_number("frontal_area_m2");
+    p.drag_coefficient = r.required_number("drag_coefficient");
+  } else if (form == "coast-down") {
+    p.form = plant::RoadLoadForm::kCoastDown;
+    p.f0_N = r.required_number("f0_N");
+    p.f1_N_s_m = r.number("f1_N_s_m", 0.0);
+    p.f2_N_s2_m2 = r.required_number("f2_N_s2_m2");
+  } else {
+    ctx.error(ctx.where[r.field("form")], r.field("form"), "\"" + form + "\"",
+              "must be \"coefficients\" or \"coast-down\"");
+  }
+  const std::string slope = r.path("slope_table", false);
+  if (!slope.empty()) p.slope_rad = load_curve(slope, r.field("slope"), ctx);
+  r.finish();
+  return p;
+}
+
+plant::BevParams read_bev(Reader& root, const std::string& cycle_path, Context& ctx) {
+  plant::BevParams p;
+  {
+    Reader r = root.sub("vehicle");
+    p.body.mass_kg = r.required_number("mass_kg");
+    p.body.wheel_radius_m = r.required_number("wheel_radius_m");
+    p.body.gear_ratio = r.required_number("gear_ratio");
+    p.body.speed_initial_m_s = r.number("speed_initial_m_s", 0.0);
+    r.finish();
+  }
+  p.road = read_road(root.sub("road"), ctx);
+  p.drive = read_drive(root.sub("drive"), ctx);
+  p.battery = read_battery(root.sub("battery"));
+  {
+    Reader r = root.sub("driver");
+    p.driver.gain = r.required_number("gain");
+    p.driver.request_max = r.number("request_max", p.driver.request_max);
+    p.driver.request_min = r.number("request_min", -p.driver.request_max);
+    r.finish();
+  }
+  {
+    Reader r = root.sub("brake");
+    p.brake.enabled = r.flag("enabled", p.brake.enabled);
+    p.brake.library_gain = r.flag("library_gain", p.brake.library_gain);
+    r.finish();
+  }
+  if (!cycle_path.empty()) p.driver.cycle_m_s = load_cycle(cycle_path, "driver.cycle", ctx);
+  return p;
+}
+
+plant::DriveRigParams read_rig(Reader& root, Context& ctx) {
+  plant::DriveRigParams p;
+  const std::int64_t flanges = root.integer("flanges", 1);
+  if (flanges != 1 && flanges != 2) {
+    ctx.error(ctx.where["flanges"], "flanges", std::to_string(flanges), "must be 1 or 2");
+  }
+  p.two_flange = flanges == 2;
+  p.dc_voltage_V = root.number("dc_voltage_V", p.dc_voltage_V);
+  p.drive = read_drive(root.sub("drive"), ctx);
+  {
+    Reader r = root.sub("load");
+    p.load_inertia_kgm2 = r.number("inertia_kgm2", p.load_inertia_kgm2);
+    p.speed_initial_rad_s = r.number("speed_initial_rad_s", p.speed_initial_rad_s);
+    p.load_torque_nominal_Nm = r.number("torque_nominal_Nm", p.load_torque_nominal_Nm);
+    p.load_speed_nominal_rad_s = r.number("speed_nominal_rad_s", p.load_speed_nominal_rad_s);
+    p.flange_a_torque_Nm = r.number("flange_a_torque_Nm", p.flange_a_torque_Nm);
+    r.finish();
+  }
+  {
+    Reader r = root.sub("request");
+    plant::Trapezoid& t = p.request_Nm;
+    t.offset = r.number("offset_Nm", 0.0);
+    t.amplitude = r.number("amplitude_Nm", 0.0);
+    t.start_s = r.number("start_s", 0.0);
+    t.rising_s = r.required_number("rising_s");
+    t.width_s = r.number("width_s", 0.0);
+    t.falling_s = r.required_number("falling_s");
+    t.period_s = r.number("period_s", 1e6);
+    r.finish();
+  }
+  return p;
+}
+
+// Gives plant/ problems the file and line their value came from.
+void report_plant_problems(const Problems& problems, Context& ctx) {
+  for (const plant::Problem& pr : problems.list()) {
+    // a table whose file failed to read was reported already
+    bool reported = false;
+    for (const std::string& failed : ctx.failed_tables) reported = reported || pr.field.rfind(failed, 0) == 0;
+    if (reported) continue;
+    std::string loc;
+    const auto bracket = pr.field.find('[');
+    if (bracket != std::string::npos) {
+      const std::string base = pr.field.substr(0, bracket);
+      const auto t = ctx.tables.find(base);
+      const std::size_t row = std::stoul(pr.field.substr(bracket + 1));
+      if (t != ctx.tables.end()) {
+        loc = t->second.first + (row < t->second.second.size() ? ":" + std::to_string(t->second.second[row]) : "");
+      }
+    }
+    if (loc.empty()) {
+      if (auto t = ctx.tables.find(pr.field); t != ctx.tables.end()) loc = t->second.first;
+    }
+    if (loc.empty()) {
+      if (auto w = ctx.where.find(pr.field); w != ctx.where.end()) loc = w->second;
+    }
+    if (loc.empty()) loc = "(vehicle)";
+    ctx.error(loc, pr.field, pr.value, pr.expected);
+  }
+}
+
+template <class Signals>
+void check_signals(const Signals& available, const std::vector<std::string>& wanted, Context& ctx) {
+  for (const std::string& w : wanted) {
+    bool found = false;
+    for (const auto& s : available) found = found || s.name == w;
+    if (!found) {
+      std::string names;
+      for (const auto& s : available) names += (names.empty() ? "" : ", ") + std::string(s.name);
+      ctx.error(ctx.where["output.signals"], "output.signals", "\"" + w + "\"", "unknown signal; available: " + names);
+    }
+  }
+}
+
+}  // namespace
+
+bool load_scenario(const std::string& path, const std::vector<std::string>& overrides, Scenario& out,
+                   std::vector<std::string>& errors) {
+  Context ctx;
+  out = Scenario{};
+  out.path = path;
+  out.name = fs::path(path).stem().string();
+
+  // layers: each --set, then the scenario file
+  std::vector<toml::table> set_docs(overrides.size());
+  for (std::size_t i = 0; i < overrides.size(); ++i) parse_override(overrides[i], set_docs[i], ctx);
+  toml::table scenario_doc;
+  if (!parse_toml(path, scenario_doc, ctx)) {
+    errors = ctx.errors;
+    return false;
+  }
+  std::vector<const toml::table*> layers;
+  for (const auto& d : set_docs) layers.push_back(&d);
+  layers.push_back(&scenario_doc);
+  Reader sc(layers, "", path, ctx);
+
+  out.description = sc.text("description", "");
+  out.vehicle_path = sc.path("vehicle_file", true);
+  out.cycle_path = sc.path("cycle", false);
+  {
+    Reader r = sc.sub("solver");
+    const std::string method = r.text("method", "rk4");
+    if (method == "rk4") {
+      out.solver.kind = SolverKind::kRk4;
+    } else if (method == "implicit-euler") {
+      out.solver.kind = SolverKind::kImplicitEuler;
+    } else {
+      ctx.error(ctx.where["solver.method"], "solver.method", "\"" + method + "\"", "must be \"rk4\" or \"implicit-euler\"");
+    }
+    out.solver.step_s = r.number("step_s", out.solver.step_s);
+    if (!(out.solver.step_s > 0.0 && out.solver.step_s <= 1.0)) {
+      ctx.error(ctx.where["solver.step_s"], "solver.step_s", io::number_text(out.solver.step_s), "must be in (0, 1] s");
+    }
+    out.solver.duration_s = r.number("duration_s", 0.0);  // 0: the cycle's length
+    r.finish();
+  }
+  {
+    Reader r = sc.sub("output");
+    out.output.signals = r.strings("signals");
+    const double interval_s = r.number("interval_s", 0.1);
+    out.output.decimation = r.integer("decimation", 0);
+    if (out.output.decimation == 0 && out.solver.step_s > 0.0 && interval_s > 0.0) {
+      out.output.decimation = std::max<std::int64_t>(1, std::llround(interval_s / out.solver.step_s));
+    }
+    if (out.output.decimation < 1) {
+      ctx.error(ctx.where["output.decimation"], "output.decimation", std::to_string(out.output.decimation), "must be >= 1");
+    }
+    r.finish();
+  }
+
+  // the vehicle: --set vehicle.*, then the scenario's [vehicle] table, then the vehicle file
+  (void)sc.sub("vehicle");  // read below, as a layer over the vehicle file
+  sc.finish();
+  toml::table vehicle_doc;
+  if (out.vehicle_path.empty() || !parse_toml(out.vehicle_path, vehicle_doc, ctx)) {
+    errors = ctx.errors;
+    return false;
+  }
+  std::vector<const toml::table*> vlayers;
+  for (const auto& d : set_docs) vlayers.push_back(d.get_as<toml::table>("vehicle"));
+  vlayers.push_back(scenario_doc.get_as<toml::table>("vehicle"));
+  vlayers.push_back(&vehicle_doc);
+  Reader vr(vlayers, "", out.vehicle_path, ctx);
+  vr.text("description", "");
+  const std::string kind = vr.text("kind", "");
+  Problems problems;
+  if (kind == "bev") {
+    if (out.cycle_path.empty()) ctx.error(path, "cycle", "", "missing (a vehicle with a driver needs a cycle file)");
+    plant::BevParams p = read_bev(vr, out.cycle_path, ctx);
+    vr.finish();
+    if (!p.driver.cycle_m_s.empty()) {
+      if (out.solver.duration_s == 0.0) out.solver.duration_s = p.driver.cycle_m_s.x().back();
+    }
+    plant::validate(p, problems);
+    check_signals(plant::BevPlant::kSignals, out.output.signals, ctx);
+    out.plant = std::move(p);
+  } else if (kind == "drive_rig") {
+    if (!out.cycle_path.empty()) ctx.error(ctx.where["cycle"], "cycle", out.cycle_path, "a drive rig has no driver: remove the cycle");
+    plant::DriveRigParams p = read_rig(vr, ctx);
+    vr.finish();
+    plant::validate(p, problems);
+    check_signals(plant::DriveRig(p).signals(), out.output.signals, ctx);
+    out.plant = std::move(p);
+  } else {
+    ctx.error(ctx.where["kind"], "kind", "\"" + kind + "\"", "must be \"bev\" or \"drive_rig\"");
+  }
+  report_plant_problems(problems, ctx);
+
+  if (ctx.failed_tables.count("driver.cycle") != 0 && out.solver.duration_s == 0.0) {
+    // no cycle: its length is unknown, and the cycle's problem was reported already
+  } else if (!(out.solver.duration_s > 0.0) || !std::isfinite(out.solver.duration_s)) {
+    ctx.error(ctx.where["solver.duration_s"], "solver.duration_s", io::number_text(out.solver.duration_s),
+              "must be > 0 s (give it, or a cycle whose last time stamp sets it)");
+  } else if (out.solver.step_s > 0.0) {
+    out.solver.steps = std::llround(out.solver.duration_s / out.solver.step_s);
+  }
+  errors = ctx.errors;
+  return errors.empty();
+}
+
+}  // namespace ehpt::hil

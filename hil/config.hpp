@@ -1,0 +1,49 @@
+#pragma once
+// Scenario and vehicle files (TOML) -> validated parameters. Start-up only.
+//
+// A scenario names a vehicle file, a cycle, the solver and the outputs; its [vehicle]
+// table and every `--set key=value` override the vehicle file key by key. Keys are strict:
+// an unknown key is an error, so a typo cannot become a default. Every problem is collected
+// and reported as "file:line: field = value: expectation" before anything runs.
+
+#include <cstdint>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "plant/bev_plant.hpp"
+#include "plant/drive_rigs.hpp"
+
+namespace ehpt::hil {
+
+enum class SolverKind { kRk4, kImplicitEuler };
+const char* solver_name(SolverKind k);
+
+struct SolverSettings {
+  SolverKind kind = SolverKind::kRk4;
+  double step_s = 1e-3;
+  double duration_s = 0.0;
+  std::int64_t steps = 0;  // round(duration_s / step_s)
+};
+
+struct OutputSettings {
+  std::vector<std::string> signals;  // empty: all of the plant's signals
+  std::int64_t decimation = 100;     // write every n-th step (row 0 and the last step always)
+};
+
+struct Scenario {
+  std::string name;         // file name without .toml
+  std::string path;
+  std::string description;
+  std::string vehicle_path;
+  std::string cycle_path;   // empty for rigs
+  std::variant<plant::BevParams, plant::DriveRigParams> plant;
+  SolverSettings solver;
+  OutputSettings output;
+};
+
+// overrides: "dotted.key=value" as given to --set (value parsed as TOML, else taken as text).
+bool load_scenario(const std::string& path, const std::vector<std::string>& overrides, Scenario& out,
+                   std::vector<std::string>& errors);
+
+}  // namespace ehpt::hil

@@ -1,0 +1,141 @@
+#pragma once
+// The batch loop: plant + solver + event stepper on the fixed grid t0 + n h (STYLE.md §8).
+// Start-up sizes every buffer; run() allocates nothing, does no I/O and takes no lock, so
+// a target can call it in chunks and write the recorded rows between chunks (progress and
+// bounded memory on long runs). The pacer is "as fast as possible"; later pacers wrap the
+// same advance() so every pacer gives the same trajectory.
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "plant/signals.hpp"
+#include "solvers/event_stepper.hpp"
+
+namespace ehpt::hil {
+
+struct RunStats {
+  std::int64_t steps_done = 0;
+  std::int64_t events = 0;
+  std::int64_t chattering_steps = 0;
+  std::int64_t newton_failures = 0;
+  std::int64_t newton_iterations = 0;
+  // first fault (plant::Fault bits), with where it happened
+  unsigned fault = 0;
+  double fault_time_s = 0.0;
+  std::int64_t fault_step = 0;
+  // vehicles: speed error v_ref - v over every grid point (km/h)
+  bool has_speed = false;
+  std::int64_t speed_samples = 0;
+  double speed_error_sq_sum = 0.0;
+  double speed_error_max_kmh = 0.0;
+  double locked_time_s = 0.0;
+};
+
+template <class Plant, class Integrator>
+class Runner {
+ public:
+  using State = typename Plant::State;
+  using Modes = typename Plant::Modes;
+  using Inputs = typename Plant::Inputs;
+  using Outputs = typename Plant::Outputs;
+
+  // columns: indices into plant.signals() to record. chunk_steps: most steps one run() call
+  // may take; the row buffer is sized for it here.
+  Runner(const Plant& plant, double h_s, std::int64_t total_steps, std::int64_t decimation,
+         std::vector<int> columns, std::int64_t chunk_steps)
+      : plant_(plant),
+        integrator_(plant),
+        stepper_(plant, integrator_, 0.0, h_s),
+        total_steps_(total_steps),
+        decimation_(decimation),
+        chunk_steps_(chunk_steps),
+        columns_(std::move(columns)) {
+    for (int c : columns_) members_.push_back(plant.signals()[static_cast<std::size_t>(c)].member);
+    rows_.resize(static_cast<std::size_t>((chunk_steps_ / decimation_ + 4) * static_cast<std::int64_t>(columns_.size())));
+    x0_ = plant.initial_state();
+    x_ = x0_;
+    m_ = plant.initial_modes(x_);
+    observe(0);
+  }
+
+  // Run phase: advances up to chunk_steps (no allocation, no I/O). Returns steps taken.
+  std::int64_t run(const std::atomic<bool>* stop = nullptr) {
+    const std::int64_t end = std::min(total_steps_, n_ + chunk_steps_);
+    const std::int64_t start = n_;
+    while (n_ < end && stats_.fault == 0) {
+      if (stop != nullptr && stop->load(std::memory_order_relaxed)) break;
+      const solvers::StepReport r = stepper_.advance(n_, x_, m_, inputs_);
+      stats_.events += r.events;
+      stats_.chattering_steps += r.chattering ? 1 : 0;
+      stats_.newton_failures += r.converged ? 0 : 1;
+      stats_.newton_iterations += r.iterations;
+      ++n_;
+      observe(n_);
+    }
+    stats_.steps_done = n_;
+    return n_ - start;
+  }
+
+  bool finished() const { return n_ >= total_steps_ || stats_.fault != 0; }
+  std::int64_t step_index() const { return n_; }
+  std::int64_t total_steps() const { return total_steps_; }
+  double time_s() const { return stepper_.time_s(n_); }
+  const RunStats& stats() const { return stats_; }
+  const State& state() const { return x_; }
+  const State& initial_state() const { return x0_; }
+  const Modes& modes() const { return m_; }
+  const Outputs& last_outputs() const { return y_; }
+
+  // Recorded rows since the last take (row-major, columns as given); clears the buffer.
+  std::span<const double> rows() const { return {rows_.data(), row_count_ * columns_.size()}; }
+  void clear_rows() { row_count_ = 0; }
+
+ private:
+  // Run phase: outputs at grid point n, metrics, and the decimated record.
+  void observe(std::int64_t n) {
+    const double t_s = stepper_.time_s(n);
+    plant_.outputs(t_s, x_, m_, inputs_, y_);
+    if constexpr (requires { y_.speed_ref_m_s; y_.speed_m_s; }) {
+      const double err_kmh = 3.6 * (y_.speed_ref_m_s - y_.speed_m_s);
+      stats_.has_speed = true;
+      ++stats_.speed_samples;
+      stats_.speed_error_sq_sum += err_kmh * err_kmh;
+      stats_.speed_error_max_kmh = std::max(stats_.speed_error_max_kmh, std::abs(err_kmh));
+    }
+    if constexpr (requires { y_.locked; }) {
+      if (n > 0 && y_.locked != 0.0) stats_.locked_time_s += stepper_.step_s();
+    }
+    const auto fault = static_cast<unsigned>(y_.fault);
+    if (fault != 0 && stats_.fault == 0) {
+      stats_.fault = fault;
+      stats_.fault_time_s = t_s;
+      stats_.fault_step = n;
+    }
+    if (n % decimation_ == 0 || n == total_steps_ || fault != 0) {
+      double* row = rows_.data() + row_count_ * columns_.size();
+      for (std::size_t c = 0; c < members_.size(); ++c) row[c] = y_.*members_[c];
+      ++row_count_;
+    }
+  }
+
+  const Plant& plant_;
+  Integrator integrator_;
+  solvers::EventStepper<Plant, Integrator> stepper_;
+  std::int64_t total_steps_, decimation_, chunk_steps_;
+  std::vector<int> columns_;
+  std::vector<double Outputs::*> members_;
+  std::vector<double> rows_;
+  std::size_t row_count_ = 0;
+  std::int64_t n_ = 0;
+  State x0_, x_;
+  Modes m_{};
+  Inputs inputs_{};
+  Outputs y_{};
+  RunStats stats_;
+};
+
+}  // namespace ehpt::hil

@@ -1,0 +1,109 @@
+#pragma once
+// Battery with one RC block: Batt1 / Batt1Conn, MODELS.md §6. Paper: P15 §4 (E = E0 + E1*SOC).
+//
+// Pack of np parallel strings of ns cells. From the + terminal inwards:
+//   p -- R0 -- X --+-- [R1 || C1] -- C_batt (the EMF E) -- n
+//                  +-- parasitic current source i_p = k |i| (from X to n)
+// Discharge current i > 0. i_m = i + i_p flows through the main branch.
+//   C_batt dE/dt    = -i_m
+//   C1     dv_rc/dt = i_m - v_rc / R1
+//   v_term = E - v_rc - R0 i,   SOC = (E - E_min) / (E_max - E_min)
+//   P_loss = R0 i^2 + v_rc^2 / R1 + (E - v_rc) i_p
+// The load is an ideal constant-power load P (the drives' DC power, §1.6, §6.5):
+//   v_term = (v_int + sqrt(v_int^2 - 4 R0 P)) / 2,  v_int = E - v_rc,  i = P / v_term
+//   (no real root: the load asks for more than the pack can give -> fault flag).
+// The parasitic coefficient k makes a full charge/discharge swing at constant cell current
+// I_eff have the stated round-trip efficiency eta (§6.3, cell values as recommended there):
+//   k = [(1-eta)(Ec_max+Ec_min) - 2(1+eta) Rc I_eff] / [(1+eta)(Ec_max+Ec_min) - 2(1-eta) Rc I_eff]
+//   with Rc = R0_cell + R1_cell; eta must not exceed eta_max (the value that gives k = 0).
+// States: E (V) and v_rc (V). The library's asserts (§6.4) become load-time problems or
+// run-time fault flags here.
+
+#include <optional>
+#include <string>
+
+#include "plant/problems.hpp"
+
+namespace ehpt::plant {
+
+struct BatteryRcParams {
+  double cell_capacity_Ah = 10.0;     // QCellNom: charge between E_min and E_max
+  double cell_emf_min_V = 3.3;        // cell EMF at SOC = 0
+  double cell_emf_max_V = 4.15;       // cell EMF at SOC = 1
+  double soc_min = 0.0;
+  double soc_max = 1.0;
+  double soc_initial = 0.5;
+  std::optional<double> cell_current_max_A;          // default 10 C
+  std::optional<double> r0_cell_Ohm;                 // default 0.05 * Ec_max / I_max
+  std::optional<double> r1_cell_Ohm;                 // default r0_cell_Ohm
+  std::optional<double> c1_cell_F;                   // default 60 s / r1_cell_Ohm
+  double efficiency = 0.85;                          // round-trip energy efficiency
+  std::optional<double> cell_current_efficiency_A;   // I_eff, default 0.5 * I_max
+  int cells_series = 1;                              // ns
+  int strings_parallel = 1;                          // np
+};
+
+// Pack constants, computed once at start-up from the cell data.
+struct BatteryRcConstants {
+  double c_batt_F = 0.0;        // EMF capacitor
+  double emf_min_V = 0.0, emf_max_V = 0.0;
+  double r0_Ohm = 0.0, r1_Ohm = 0.0, c1_F = 0.0;
+  double current_max_A = 0.0;   // pack
+  double k_parasitic = 0.0;
+  double efficiency_max = 0.0;  // eta at k = 0
+  double soc_min = 0.0, soc_max = 1.0;
+  double emf_initial_V = 0.0;
+  int strings_parallel = 1;
+};
+
+BatteryRcConstants derive(const BatteryRcParams& p);
+void validate(const BatteryRcParams& p, const std::string& at, Problems& problems);
+
+struct BatteryTerminal {
+  double voltage_V = 0.0;       // v_term
+  double current_A = 0.0;       // i, > 0 discharging
+  double parasitic_A = 0.0;     // i_p
+  double main_A = 0.0;          // i_m
+  double loss_W = 0.0;          // R0 i^2 + v_rc^2/R1 + (E - v_rc) i_p
+  bool feasible = true;         // false: constant-power load beyond the pack's maximum power
+};
+
+class BatteryRc {
+ public:
+  static constexpr int kNumStates = 2;
+  static constexpr int kEmf = 0, kVrc = 1;  // emf_V, v_rc_V
+
+  BatteryRc() = default;
+  explicit BatteryRc(const BatteryRcParams& params)
+      : c_(derive(params)),
+        inv_c_batt_F_(1.0 / c_.c_batt_F),
+        inv_c1_F_(1.0 / c_.c1_F),
+        inv_r1_Ohm_(1.0 / c_.r1_Ohm) {}
+  const BatteryRcConstants& constants() const { return c_; }
+
+  // Run phase: pure functions.
+  BatteryTerminal terminal(double emf_V, double v_rc_V, double load_power_W) const;
+  // The same at an imposed terminal current (tests, current-controlled loads).
+  BatteryTerminal at_current(double emf_V, double v_rc_V, double current_A) const;
+  double demf_dt(const BatteryTerminal& b) const { return -b.main_A * inv_c_batt_F_; }
+  double dvrc_dt(const BatteryTerminal& b, double v_rc_V) const {
+    return (b.main_A - v_rc_V * inv_r1_Ohm_) * inv_c1_F_;
+  }
+  double soc(double emf_V) const { return (emf_V - c_.emf_min_V) / (c_.emf_max_V - c_.emf_min_V); }
+  // Energy held by the two capacitors; its decrease is what the battery gave out, losses included.
+  double stored_energy_J(double emf_V, double v_rc_V) const {
+    return 0.5 * c_.c_batt_F * emf_V * emf_V + 0.5 * c_.c1_F * v_rc_V * v_rc_V;
+  }
+  // §6.4 run-time asserts: SOC window and cell current.
+  bool soc_in_window(double emf_V) const {
+    const double s = soc(emf_V);
+    return s >= c_.soc_min && s <= c_.soc_max;
+  }
+  bool current_in_limit(double current_A) const { return std::abs(current_A) < c_.current_max_A; }
+
+ private:
+  BatteryRcConstants c_;
+  double inv_c_batt_F_ = 0.0, inv_c1_F_ = 0.0, inv_r1_Ohm_ = 0.0;
+};
+
+}  // namespace ehpt::plant

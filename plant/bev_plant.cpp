@@ -1,0 +1,231 @@
+#include "plant/bev_plant.hpp"
+
+#include <cmath>
+
+namespace ehpt::plant {
+
+void validate(const VehicleBodyParams& p, const std::string& at, Problems& problems) {
+  problems.require_positive(at + ".mass_kg", p.mass_kg);
+  problems.require_positive(at + ".wheel_radius_m", p.wheel_radius_m);
+  problems.require_positive(at + ".gear_ratio", p.gear_ratio);
+  problems.require_non_negative(at + ".speed_initial_m_s", p.speed_initial_m_s);
+}
+
+void validate(const BevParams& p, Problems& problems) {
+  validate(p.body, "vehicle", problems);
+  validate(p.road, "road", problems);
+  validate(p.drive, "drive", problems);
+  validate(p.battery, "battery", problems);
+  validate(p.driver, "driver", problems);
+}
+
+const std::array<Signal<BevPlant::Outputs>, 30> BevPlant::kSignals = {{
+    {"time_s", &Outputs::time_s, "simulation time"},
+    {"speed_ref_m_s", &Outputs::speed_ref_m_s, "cycle (wanted) speed"},
+    {"speed_m_s", &Outputs::speed_m_s, "vehicle speed"},
+    {"distance_m", &Outputs::distance_m, "travelled distance"},
+    {"acceleration_m_s2", &Outputs::acceleration_m_s2, "vehicle acceleration"},
+    {"driver_request_Nm", &Outputs::driver_request_Nm, "driver torque request at the drive shaft"},
+    {"drive_torque_Nm", &Outputs::drive_torque_Nm, "torque the drive applies (after the limiter)"},
+    {"drive_torque_limit_Nm", &Outputs::drive_torque_limit_Nm, "limiter bound yH (genTauLim)"},
+    {"drive_limit_state", &Outputs::drive_limit_state, "limiter state 0 torque, 1 power, 2 speed ramp, 3 over speed"},
+    {"drive_limiting", &Outputs::drive_limiting, "1 when the limiter cuts the request"},
+    {"drive_speed_rad_s", &Outputs::drive_speed_rad_s, "drive shaft speed"},
+    {"drive_power_mech_W", &Outputs::drive_power_mech_W, "mechanical power torque x speed"},
+    {"drive_power_dc_W", &Outputs::drive_power_dc_W, "DC power drawn by the drive"},
+    {"drive_efficiency", &Outputs::drive_efficiency, "efficiency from the map"},
+    {"brake_force_N", &Outputs::brake_force_N, "friction-brake force magnitude"},
+    {"road_force_N", &Outputs::road_force_N, "road load (rolling + aero), or the locked reaction"},
+    {"grade_rad", &Outputs::grade_rad, "road angle, > 0 uphill"},
+    {"altitude_m", &Outputs::altitude_m, "altitude gained since start"},
+    {"battery_voltage_V", &Outputs::battery_voltage_V, "terminal voltage"},
+    {"battery_current_A", &Outputs::battery_current_A, "terminal current, > 0 discharging"},
+    {"battery_power_W", &Outputs::battery_power_W, "terminal power v i (batPowDel)"},
+    {"battery_emf_V", &Outputs::battery_emf_V, "EMF E"},
+    {"soc", &Outputs::soc, "state of charge (batSOC)"},
+    {"locked", &Outputs::locked, "1 while the vehicle is stuck at standstill (dragForce.locked)"},
+    {"fault", &Outputs::fault, "fault bits: 1 SOC window, 2 cell current, 4 power infeasible, 8 non-finite"},
+    {"battery_out_J", &Outputs::battery_out_J, "integral of terminal power"},
+    {"road_work_J", &Outputs::road_work_J, "integral of road-load power"},
+    {"drive_loss_J", &Outputs::drive_loss_J, "integral of drive losses"},
+    {"battery_loss_J", &Outputs::battery_loss_J, "integral of battery losses"},
+    {"brake_work_J", &Outputs::brake_work_J, "integral of brake dissipation"},
+}};
+
+struct BevPlant::Eval {
+  DriverOutput driver;
+  DriveOperatingPoint drive;
+  BatteryTerminal battery;
+  double drive_speed_rad_s = 0.0;
+  double grade_rad = 0.0;
+  double tractive_N = 0.0;     // drive torque at the wheels
+  double rolling_N = 0.0;      // Coulomb part (also the break-away force)
+  double speed_force_N = 0.0;  // aero / viscous part, odd in v
+  double grade_force_N = 0.0;
+  double brake_N = 0.0;        // magnitude
+  double applied_N = 0.0;      // what the road must hold while stuck ("sa" of §7.2)
+  double road_N = 0.0;         // reaction of the road (rolling + speed part, or sa when stuck)
+  double accel_m_s2 = 0.0;
+};
+
+BevPlant::BevPlant(const BevParams& params)
+    : p_(params), drive_(params.drive), battery_(params.battery), road_(params.road, params.body.mass_kg) {
+  g_over_r_ = p_.body.gear_ratio / p_.body.wheel_radius_m;
+  mass_eff_kg_ = p_.body.mass_kg + p_.drive.inertia_kgm2 * g_over_r_ * g_over_r_;
+  inv_mass_eff_kg_ = 1.0 / mass_eff_kg_;
+  brake_gain_ = !p_.brake.enabled ? 0.0
+                : p_.brake.library_gain ? p_.body.gear_ratio * p_.body.wheel_radius_m
+                                        : g_over_r_;
+}
+
+BevPlant::State BevPlant::initial_state() const {
+  State x = State::Zero();
+  x[kSpeed] = p_.body.speed_initial_m_s;
+  x[kEmf] = battery_.constants().emf_initial_V;
+  return x;
+}
+
+BevPlant::Modes BevPlant::initial_modes(const State& x0) const {
+  // §7.2: at t = 0 with v = 0 the vehicle is stuck and locked
+  return Modes{x0[kSpeed] > 0.0 ? Motion::kForward : Motion::kStuck};
+}
+
+// Run phase: no allocation.
+BevPlant::Eval BevPlant::evaluate(double t_s, const State& x, const Modes& m) const {
+  Eval e;
+  const double v = x[kSpeed];
+  // driver and drive: the driver's request is a shaft torque, the limiter may cut it
+  e.driver = drive(p_.driver, t_s, v);
+  e.drive_speed_rad_s = v * g_over_r_;
+  e.drive = drive_.operate(e.driver.request, e.drive_speed_rad_s);
+  // the battery supplies the drive's DC power
+  e.battery = battery_.terminal(x[kEmf], x[kVrc], e.drive.power_dc_W);
+  // forces at the wheel
+  e.grade_rad = road_.grade_rad(x[kDistance]);
+  e.tractive_N = e.drive.torque_Nm * g_over_r_;
+  e.rolling_N = road_.rolling_N(e.grade_rad);
+  e.speed_force_N = road_.speed_force_N(v);
+  e.grade_force_N = road_.grade_force_N(e.grade_rad);
+  const double unmet_braking_Nm = e.drive.torque_Nm - e.driver.request;
+  e.brake_N = unmet_braking_Nm > 0.0 ? brake_gain_ * unmet_braking_Nm : 0.0;
+  e.applied_N = e.tractive_N - e.grade_force_N;
+  switch (m.motion) {
+    case Motion::kStuck:
+      // the road holds the car: reaction = applied force, no acceleration
+      e.road_N = e.applied_N;
+      e.accel_m_s2 = 0.0;
+      break;
+    case Motion::kForward:
+      e.road_N = e.rolling_N + e.speed_force_N;
+      e.accel_m_s2 = (e.applied_N - e.road_N - e.brake_N) * inv_mass_eff_kg_;
+      break;
+    case Motion::kBackward:
+      e.road_N = -e.rolling_N + e.speed_force_N;
+      e.accel_m_s2 = (e.applied_N - e.road_N + e.brake_N) * inv_mass_eff_kg_;
+      break;
+  }
+  return e;
+}
+
+void BevPlant::derivatives(double t_s, const State& x, const Modes& m, const Inputs&, State& dx) const {
+  const Eval e = evaluate(t_s, x, m);
+  const double v = x[kSpeed];
+  const double speed_abs = std::abs(v);
+  dx[kSpeed] = e.accel_m_s2;
+  dx[kDistance] = v;
+  dx[kEmf] = battery_.demf_dt(e.battery);
+  dx[kVrc] = battery_.dvrc_dt(e.battery, x[kVrc]);
+  dx[kAltitude] = e.grade_rad == 0.0 ? 0.0 : v * std::sin(e.grade_rad);
+  // energy integrals for the audit (all zero while stuck because v = 0)
+  dx[kBatteryOutJ] = e.battery.voltage_V * e.battery.current_A;
+  dx[kRoadJ] = e.rolling_N * speed_abs + e.speed_force_N * v;
+  dx[kDriveLossJ] = e.drive.power_dc_W - e.drive.power_mech_W;
+  dx[kBatteryLossJ] = e.battery.loss_W;
+  dx[kBrakeJ] = e.brake_N * speed_abs;
+}
+
+void BevPlant::crossings(double t_s, const State& x, const Modes& m, const Inputs&, double* z) const {
+  switch (m.motion) {
+    case Motion::kForward:
+      z[0] = x[kSpeed];
+      break;
+    case Motion::kBackward:
+      z[0] = -x[kSpeed];
+      break;
+    case Motion::kStuck: {
+      const Eval e = evaluate(t_s, x, m);
+      z[0] = (e.rolling_N + e.brake_N) - std::abs(e.applied_N);
+      break;
+    }
+  }
+}
+
+void BevPlant::on_crossing(int, double t_s, State& x, Modes& m, const Inputs&) const {
+  if (m.motion != Motion::kStuck) x[kSpeed] = 0.0;  // came to rest: exactly zero
+  // at rest (just stopped or stuck): stay, or start in the direction of the applied force
+  const Modes stuck{Motion::kStuck};
+  const Eval e = evaluate(t_s, x, stuck);
+  const Motion next = motion_at_rest(e.applied_N, e.rolling_N + e.brake_N);
+  // leaving the stuck mode needs the force to exceed the threshold; a crossing that fired
+  // from the stuck mode does so by construction, one from motion may stay stuck
+  m.motion = next;
+}
+
+void BevPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs&, Outputs& y) const {
+  const Eval e = evaluate(t_s, x, m);
+  y.time_s = t_s;
+  y.speed_ref_m_s = e.driver.speed_ref_m_s;
+  y.speed_m_s = x[kSpeed];
+  y.distance_m = x[kDistance];
+  y.acceleration_m_s2 = e.accel_m_s2;
+  y.driver_request_Nm = e.driver.request;
+  y.drive_torque_Nm = e.drive.torque_Nm;
+  y.drive_torque_limit_Nm = e.drive.limit_Nm;
+  y.drive_limit_state = e.drive.limit_state;
+  y.drive_limiting = e.drive.limiting ? 1.0 : 0.0;
+  y.drive_speed_rad_s = e.drive_speed_rad_s;
+  y.drive_power_mech_W = e.drive.power_mech_W;
+  y.drive_power_dc_W = e.drive.power_dc_W;
+  y.drive_efficiency = e.drive.efficiency;
+  y.brake_force_N = e.brake_N;
+  y.road_force_N = e.road_N;
+  y.grade_rad = e.grade_rad;
+  y.altitude_m = x[kAltitude];
+  y.battery_voltage_V = e.battery.voltage_V;
+  y.battery_current_A = e.battery.current_A;
+  y.battery_power_W = e.battery.voltage_V * e.battery.current_A;
+  y.battery_emf_V = x[kEmf];
+  y.soc = battery_.soc(x[kEmf]);
+  y.locked = m.motion == Motion::kStuck ? 1.0 : 0.0;
+  unsigned f = kFaultNone;
+  if (!battery_.soc_in_window(x[kEmf])) f |= kFaultSocWindow;
+  if (!battery_.current_in_limit(e.battery.current_A)) f |= kFaultCellCurrent;
+  if (!e.battery.feasible) f |= kFaultPowerInfeasible;
+  if (!x.allFinite()) f |= kFaultNonFinite;
+  y.fault = f;
+  y.battery_out_J = x[kBatteryOutJ];
+  y.road_work_J = x[kRoadJ];
+  y.drive_loss_J = x[kDriveLossJ];
+  y.battery_loss_J = x[kBatteryLossJ];
+  y.brake_work_J = x[kBrakeJ];
+}
+
+EnergyAudit BevPlant::audit(const State& x0, const State& x) const {
+  const auto delta = [&](int i) { return x[i] - x0[i]; };
+  const double stored_out_J =
+      battery_.stored_energy_J(x0[kEmf], x0[kVrc]) - battery_.stored_energy_J(x[kEmf], x[kVrc]);
+  const double kinetic_J = 0.5 * mass_eff_kg_ * (x[kSpeed] * x[kSpeed] - x0[kSpeed] * x0[kSpeed]);
+  const double potential_J = p_.body.mass_kg * kGravity_m_s2 * delta(kAltitude);
+  EnergyAudit a;
+  a.sources_J = stored_out_J;
+  a.battery_out_J = delta(kBatteryOutJ);
+  a.residual_J = stored_out_J - (delta(kRoadJ) + delta(kDriveLossJ) + delta(kBatteryLossJ) + delta(kBrakeJ) +
+                                 kinetic_J + potential_J);
+  a.terms = {{"battery_stored_out_J", stored_out_J},   {"battery_terminal_out_J", delta(kBatteryOutJ)},
+             {"road_load_work_J", delta(kRoadJ)},       {"drive_losses_J", delta(kDriveLossJ)},
+             {"battery_losses_J", delta(kBatteryLossJ)}, {"brake_dissipation_J", delta(kBrakeJ)},
+             {"kinetic_energy_change_J", kinetic_J},     {"potential_energy_change_J", potential_J}};
+  return a;
+}
+
+}  // namespace ehpt::plant

@@ -1,0 +1,119 @@
+#pragma once
+// Battery-electric vehicle with a map-based one-flange drive: MBEV, MODELS.md §10.3
+// (tutorial §4), built from PropDriver (§8), OneFlange (§1), Batt1 (§6), DragForce (§7) and
+// the vehicle of §7.4. Paper: P15 §5.1 (same structure as EvPm_bat, map-based drive).
+//
+//   driver:   tau_req = clamp(k (v_ref(t) - v), -yMax, yMax)            (N m at the drive shaft)
+//   drive:    w = v G / r;  tau = clamp(tau_req, -tau_lim(w), tau_lim(w));  P_dc from the map
+//   brake:    the braking the drive cannot deliver: F_brake = (G / r) max(0, tau - tau_req),
+//             opposing motion (MBEV's gain G*r is a source defect, §10.3; flag brake_library_gain)
+//   battery:  supplies P_dc (constant-power load on the RC pack)
+//   body:     (m + J (G/r)^2) dv/dt = tau G/r - F_roll - F_v(v) - m g sin(alpha) - F_brake
+//             ds/dt = v,  dh/dt = v sin(alpha)
+//   stuck:    dv/dt = 0 while |tau G/r - m g sin(alpha)| <= F_roll + F_brake   (locked, §7.2)
+//
+// State (one flat vector):
+//   0 v (m/s), 1 s (m), 2 battery EMF E (V), 3 battery v_rc (V), 4 altitude h (m),
+//   5..9 energy integrals (J): battery terminal energy out, road-load work, drive losses,
+//   battery losses, brake dissipation. The integrals feed the energy audit:
+//     stored-energy decrease = road work + drive losses + battery losses + brake
+//                              + change of kinetic energy (vehicle + rotor) + m g (h - h0)
+// Crossing 0 (one function per mode, always falling through zero):
+//   kForward:  z = v                -> stop: v := 0, then stuck or restart per motion_at_rest
+//   kBackward: z = -v               -> same
+//   kStuck:    z = F_breakaway - |F_applied|  -> start in the direction of F_applied
+
+#include <array>
+#include <span>
+
+#include <Eigen/Core>
+
+#include "plant/battery_rc.hpp"
+#include "plant/map_drive.hpp"
+#include "plant/prop_driver.hpp"
+#include "plant/road_load.hpp"
+#include "plant/signals.hpp"
+
+namespace ehpt::plant {
+
+struct VehicleBodyParams {
+  double mass_kg = 0.0;
+  double wheel_radius_m = 0.0;
+  double gear_ratio = 1.0;          // drive speed / wheel speed
+  double speed_initial_m_s = 0.0;
+};
+
+void validate(const VehicleBodyParams& p, const std::string& at, Problems& problems);
+
+struct BrakeParams {
+  bool enabled = true;
+  bool library_gain = false;  // reproduce MBEV's G*r gain instead of G/r (source defect)
+};
+
+struct BevParams {
+  VehicleBodyParams body;
+  RoadLoadParams road;
+  MapDriveParams drive;
+  BatteryRcParams battery;
+  PropDriverParams driver;
+  BrakeParams brake;
+};
+
+void validate(const BevParams& p, Problems& problems);
+
+class BevPlant {
+ public:
+  static constexpr int kSpeed = 0, kDistance = 1, kEmf = 2, kVrc = 3, kAltitude = 4;
+  static constexpr int kBatteryOutJ = 5, kRoadJ = 6, kDriveLossJ = 7, kBatteryLossJ = 8, kBrakeJ = 9;
+  static constexpr int kNumStates = 10;
+  static constexpr int kNumCrossings = 1;
+  using State = Eigen::Matrix<double, kNumStates, 1>;
+  struct Modes {
+    Motion motion = Motion::kStuck;
+  };
+  struct Inputs {};  // the driver is part of this plant; an external ECU will add fields here
+
+  struct Outputs {
+    double time_s = 0, speed_ref_m_s = 0, speed_m_s = 0, distance_m = 0, acceleration_m_s2 = 0;
+    double driver_request_Nm = 0, drive_torque_Nm = 0, drive_torque_limit_Nm = 0, drive_limit_state = 0;
+    double drive_limiting = 0, drive_speed_rad_s = 0, drive_power_mech_W = 0, drive_power_dc_W = 0;
+    double drive_efficiency = 0, brake_force_N = 0, road_force_N = 0, grade_rad = 0, altitude_m = 0;
+    double battery_voltage_V = 0, battery_current_A = 0, battery_power_W = 0, battery_emf_V = 0, soc = 0;
+    double locked = 0, fault = 0;
+    double battery_out_J = 0, road_work_J = 0, drive_loss_J = 0, battery_loss_J = 0, brake_work_J = 0;
+  };
+  static const std::array<Signal<Outputs>, 30> kSignals;
+
+  explicit BevPlant(const BevParams& params);  // start-up: params already validated
+
+  State initial_state() const;
+  Modes initial_modes(const State& x0) const;
+
+  // Run phase: pure functions, no allocation.
+  void derivatives(double t_s, const State& x, const Modes& m, const Inputs& u, State& dx) const;
+  void crossings(double t_s, const State& x, const Modes& m, const Inputs& u, double* z) const;
+  void on_crossing(int index, double t_s, State& x, Modes& m, const Inputs& u) const;
+  void outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const;
+
+  std::span<const Signal<Outputs>> signals() const { return kSignals; }
+  // Energy audit between x0 and x (end of run; allocates).
+  EnergyAudit audit(const State& x0, const State& x) const;
+
+  const BevParams& params() const { return p_; }
+  const BatteryRc& battery() const { return battery_; }
+
+ private:
+  struct Eval;  // everything one evaluation computes
+  Eval evaluate(double t_s, const State& x, const Modes& m) const;
+
+  BevParams p_;
+  MapDrive drive_;
+  BatteryRc battery_;
+  RoadLoad road_;
+  double g_over_r_ = 0.0;        // drive speed per vehicle speed (rad/m)
+  double mass_eff_kg_ = 0.0;     // vehicle + rotor reflected
+  double inv_mass_eff_kg_ = 0.0;
+  double brake_gain_ = 0.0;      // N per N m of unmet braking torque
+};
+
+}  // namespace ehpt::plant

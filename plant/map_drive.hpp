@@ -1,0 +1,110 @@
+#pragma once
+// Map-based electric drive (inverter + machine), MODELS.md §1 (one flange) and §2 (two flanges).
+// Paper: P15 §3 "MBOneFlange", "MBTwoFlange", Figs. 10-13.
+//
+// Seen from outside: a rotor inertia J, a torque that follows the request within torque,
+// power and speed limits, and a DC power drawn that is the mechanical power corrected by an
+// efficiency map (or a loss formula). The rotor speed is a state of whatever mechanical
+// system the drive is bolted to, so this file holds only pure functions of (request, speed).
+//
+// Limiter (§1.3), with w = |speed|, w_base = P_max / tau_max, alpha = limit_ramp_fraction:
+//   w <  w_base                      state 0   tau_lim = tau_max
+//   w >= w_base                      state 1   tau_lim = P_max / w
+//   w_max < w < (1 + alpha) w_max    state 2   tau_lim = (P_max / w_max)(1 - (w - w_max)/(alpha w_max))
+//   w >= (1 + alpha) w_max           state 3   tau_lim = 0
+//   tau = clamp(tau_ref, -tau_lim, +tau_lim),  limiting = |tau - tau_ref| > 1e-15
+// |speed| is used (V16), so a drive turning backwards is limited the same way.
+//
+// Efficiency (§1.4): P_mech = tau * speed;
+//   eta = Map(|tau| / tau_max, |speed| / w_max)   bilinear, torque = row axis, linear extrapolation
+//   P_dc = P_mech / eta  when P_mech > 0 (motoring);  P_dc = P_mech * eta  otherwise.
+//   eta is floored at 0.01 before dividing.
+// Loss formula (§1.5, V2/V3 form): Tu = |tau|/tau_max, Wu = |speed|/w_max,
+//   loss_pu = A + bT Tu^2 + bW Wu^2 + bP (Tu Wu)^2,  eta = Tu Wu / (Tu Wu + loss_pu).
+// Ideal: eta = 1 (the SMEHV/V2 default map [0,0,1;0,1,1;1,1,1]).
+//
+// The DC interface is an ideal constant-power load (§1.6 recommendation); the battery node
+// is solved algebraically in battery_rc.hpp.
+
+#include <string>
+
+#include "plant/problems.hpp"
+#include "plant/table.hpp"
+
+namespace ehpt::plant {
+
+enum class DriveLossModel { kIdeal, kMap, kFormula };
+
+struct LossFormula {
+  double a = 0.006;   // constant losses, per unit of tau_max * w_max
+  double b_t = 0.05;  // torque-squared coefficient
+  double b_w = 0.02;  // speed-squared coefficient
+  double b_p = 0.05;  // (torque * speed)-squared coefficient
+};
+
+struct MapDriveParams {
+  double torque_max_Nm = 80.0;
+  double power_max_W = 22000.0;
+  double speed_max_rad_s = 3000.0;
+  double inertia_kgm2 = 0.25;
+  double limit_ramp_fraction = 0.10;  // alpha of §1.3 (V3's OneFlange uses 0.05)
+  DriveLossModel loss_model = DriveLossModel::kIdeal;
+  Table2d efficiency_map;             // per unit; rows torque/tau_max, columns speed/w_max
+  LossFormula loss_formula;
+};
+
+// Also warns (as a problem only when impossible) about the §1.3 quirk w_max < w_base.
+void validate(const MapDriveParams& p, const std::string& at, Problems& problems);
+
+struct TorqueLimit {
+  double torque_Nm = 0.0;  // yH of §1.3 (>= 0); the lower limit is -torque_Nm
+  int state = 0;           // 0 torque, 1 power, 2 speed ramp, 3 over speed
+};
+
+struct DriveOperatingPoint {
+  double torque_Nm = 0.0;      // applied to the rotor
+  double limit_Nm = 0.0;       // yH, bus genTauLim / motTauLim
+  int limit_state = 0;
+  bool limiting = false;
+  double power_mech_W = 0.0;   // torque * speed
+  double power_dc_W = 0.0;     // drawn from the DC bus (< 0 when generating)
+  double efficiency = 1.0;
+};
+
+// The drive's equations with the constants they need computed once.
+class MapDrive {
+ public:
+  MapDrive() = default;
+  explicit MapDrive(const MapDriveParams& params);
+  const MapDriveParams& params() const { return p_; }
+
+  // Run phase: pure functions, no allocation.
+  TorqueLimit torque_limit(double speed_rad_s) const;
+  double efficiency(double torque_Nm, double speed_rad_s) const;
+  DriveOperatingPoint operate(double torque_request_Nm, double speed_rad_s) const;
+
+ private:
+  MapDriveParams p_;
+  double base_speed_rad_s_ = 0.0;  // P_max / tau_max
+  double inv_torque_max_ = 0.0, inv_speed_max_ = 0.0, inv_ramp_rad_s_ = 0.0;
+  double power_over_speed_max_Nm_ = 0.0;
+};
+
+// Bus view of a one-flange drive ("gen", §0.5) and of a two-flange drive ("mot", §2.4):
+// the names a bus will carry, in SI units.
+struct GenBus {
+  double genTauRef_Nm = 0.0;
+  double genPowDel_W = 0.0;  // power at the flange, after the rotor inertia
+  double genW_rad_s = 0.0;
+  double genTauLim_Nm = 0.0;
+};
+struct MotBus {
+  double motTauRef_Nm = 0.0;
+  double motPowDelA_W = 0.0;   // delivered through flange A
+  double motPowDelB_W = 0.0;   // delivered through flange B
+  double motPowDelAB_W = 0.0;  // A + B = tau * w - J w dw/dt
+  double motW_rad_s = 0.0;
+  double motTauLim_Nm = 0.0;
+};
+
+}  // namespace ehpt::plant

@@ -1,0 +1,45 @@
+#pragma once
+// PropDriver: proportional driver on a speed profile, MODELS.md §8. Paper: P15 §5.1.
+//   v_ref(t) = Cycle(t)                (linear in time; repeated stamps = steps; end value held)
+//   u        = k (v_ref - v)
+//   request  = clamp(u, request_min, request_max)
+//   accel    = clamp(u, 0, request_max),  brake = clamp(u, request_min, 0)   (brake <= 0, as the code)
+// Units of the request depend on the vehicle: a shaft torque in N m for the EVs (k in
+// N m/(m/s)), a per-unit request for the power-split vehicles (k in 1/(m/s)).
+// No state. The cycle is loaded from CSV at start-up and converted to m/s there.
+
+#include <string>
+
+#include "plant/problems.hpp"
+#include "plant/table.hpp"
+
+namespace ehpt::plant {
+
+struct PropDriverParams {
+  Table1d cycle_m_s;            // speed reference vs time (s)
+  double gain = 0.0;            // k
+  double request_max = 1e5;     // yMax
+  double request_min = -1e5;    // -yMax unless set
+};
+
+void validate(const PropDriverParams& p, const std::string& at, Problems& problems);
+
+struct DriverOutput {
+  double speed_ref_m_s = 0.0;
+  double request = 0.0;
+  double accel = 0.0;
+  double brake = 0.0;
+};
+
+// Run phase: pure function.
+inline DriverOutput drive(const PropDriverParams& p, double t_s, double speed_m_s) {
+  DriverOutput d;
+  d.speed_ref_m_s = p.cycle_m_s(t_s);
+  const double u = p.gain * (d.speed_ref_m_s - speed_m_s);
+  d.request = u > p.request_max ? p.request_max : (u < p.request_min ? p.request_min : u);
+  d.accel = d.request > 0.0 ? d.request : 0.0;
+  d.brake = d.request < 0.0 ? d.request : 0.0;
+  return d;
+}
+
+}  // namespace ehpt::plant

@@ -1,0 +1,39 @@
+#pragma once
+// Named output signals of a plant. Each plant lists its Outputs fields with their column
+// name (unit suffix included), so the runner can write any chosen subset without knowing
+// the plant, and a bus codec can later map the same names.
+
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace ehpt::plant {
+
+template <class Outputs>
+struct Signal {
+  std::string_view name;      // column header, SI unit as suffix: "speed_m_s"
+  double Outputs::*member;
+  std::string_view meaning;   // one line for the README and `ehpt run --help`
+};
+
+// Run-time faults (§6.4 asserts and numerical health). Plants report them in Outputs.
+enum Fault : unsigned {
+  kFaultNone = 0,
+  kFaultSocWindow = 1u << 0,        // SOC left [soc_min, soc_max]
+  kFaultCellCurrent = 1u << 1,      // |i| / np >= cell_current_max_A
+  kFaultPowerInfeasible = 1u << 2,  // constant-power load beyond the pack's maximum power
+  kFaultNonFinite = 1u << 3,        // NaN or Inf in the state
+};
+
+// Energy audit over a run, built once at the end (may allocate). The plant states the
+// balance; `sources_J` is what entered the system (battery stores, DC source, fuel) and
+// `residual_J` = sources - (all sinks and stored changes). Terms are listed for summary.json.
+struct EnergyAudit {
+  double sources_J = 0.0;
+  double residual_J = 0.0;
+  double battery_out_J = 0.0;  // net out of the battery terminals (0 without a battery)
+  std::vector<std::pair<std::string, double>> terms;
+};
+
+}  // namespace ehpt::plant

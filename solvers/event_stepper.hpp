@@ -1,0 +1,151 @@
+#pragma once
+// Fixed-grid stepping with zero-crossing events (STYLE.md §6, MODELS.md §12).
+//
+// Crossing convention: each of the plant's kNumCrossings functions z_i(t, x, mode) is > 0
+// while the current mode is valid; the event fires when z_i falls to <= 0 inside a step,
+// i.e. on (t0, t1] (z0 > 0 and z1 <= 0). A z that starts a segment already < 0 (it slid
+// from exactly 0 to below) fires at once. A plant negates z for a "rising" condition.
+// The plant provides, besides derivatives():
+//   void crossings(double t_s, const State&, const Modes&, const Inputs&, double* z) const;
+//   void on_crossing(int i, double t_s, State& x, Modes& m, const Inputs&) const;  // mode switch + reset
+//
+// One step from t_n = t0 + n h to t_{n+1}:
+//   1. integrate the whole (remaining) step; evaluate z at its end;
+//   2. if some z fell, locate the earliest crossing by bracketing in time (Illinois with a
+//      bisection every third iteration, so the bracket at least halves every three
+//      iterations), re-integrating from the segment start; stop when the bracket is
+//      <= tolerance (1e-7 h, below the 1e-6 h asked for);
+//   3. integrate to the crossed end of the bracket, call on_crossing (mode and reset), and
+//      go back to 1 for the rest of the step.
+// The grid stays t0 + n h whatever happens inside. At most kMaxEventsPerStep events are
+// handled in one step; more are counted as chattering and the step is finished in the
+// last mode. Blind spot: a z that dips below zero and comes back within one step is not seen.
+// Time is t0 + n h, never accumulated.
+
+#include <array>
+#include <cstdint>
+
+#include "solvers/integrators.hpp"
+
+namespace ehpt::solvers {
+
+struct StepReport {
+  int events = 0;           // crossings handled in this step
+  bool chattering = false;  // event cap reached
+  bool converged = true;    // every integrator call converged
+  int iterations = 0;       // Newton iterations summed over the step
+  double event_time_s = 0;  // time of the last event handled in this step (if events > 0)
+};
+
+template <class Plant, class Integrator>
+class EventStepper {
+ public:
+  using State = typename Plant::State;
+  using Modes = typename Plant::Modes;
+  using Inputs = typename Plant::Inputs;
+  static constexpr int kNumZ = Plant::kNumCrossings;
+  static constexpr int kMaxEventsPerStep = 8;
+  static constexpr int kMaxLocateIterations = 100;
+
+  EventStepper(const Plant& plant, Integrator& integrator, double t0_s, double h_s)
+      : plant_(plant), integ_(integrator), t0_s_(t0_s), h_s_(h_s), tol_s_(1e-7 * h_s) {}
+
+  double time_s(std::int64_t n) const { return t0_s_ + static_cast<double>(n) * h_s_; }
+  double step_s() const { return h_s_; }
+
+  // Run phase: x, m at t_n -> t_{n+1}. No allocation.
+  StepReport advance(std::int64_t n, State& x, Modes& m, const Inputs& u) {
+    StepReport r;
+    const double t_end = time_s(n + 1);
+    double ta = time_s(n);
+    xa_ = x;
+    for (;;) {
+      xb_ = xa_;
+      integrate(ta, t_end - ta, m, u, xb_, r);
+      if constexpr (kNumZ == 0) {
+        x = xb_;
+        return r;
+      } else {
+        plant_.crossings(ta, xa_, m, u, za_.data());
+        plant_.crossings(t_end, xb_, m, u, zb_.data());
+        int fired = -1;
+        double tau_s = t_end - ta;
+        for (int i = 0; i < kNumZ; ++i) {
+          if (za_[i] < 0.0) {  // already past zero at the segment start: fire now
+            fired = i;
+            tau_s = 0.0;
+            break;
+          }
+          if (za_[i] > 0.0 && zb_[i] <= 0.0) {
+            const double at_s = locate(i, ta, t_end - ta, m, u, r);
+            if (fired < 0 || at_s < tau_s) {
+              fired = i;
+              tau_s = at_s;
+            }
+          }
+        }
+        if (fired < 0) {
+          x = xb_;
+          return r;
+        }
+        if (r.events >= kMaxEventsPerStep) {
+          r.chattering = true;
+          x = xb_;
+          return r;
+        }
+        // integrate to the event, switch the mode, and carry on with the rest of the step
+        if (tau_s > 0.0) integrate(ta, tau_s, m, u, xa_, r);
+        ta += tau_s;
+        plant_.on_crossing(fired, ta, xa_, m, u);
+        ++r.events;
+        r.event_time_s = ta;
+        if (!(ta < t_end)) {
+          x = xa_;
+          return r;
+        }
+      }
+    }
+  }
+
+ private:
+  void integrate(double t_s, double h_s, const Modes& m, const Inputs& u, State& x, StepReport& r) {
+    const IntegratorStatus s = integ_.step(t_s, h_s, m, u, x);
+    r.converged = r.converged && s.converged;
+    r.iterations += s.iterations;
+  }
+
+  // Earliest time (from ta) at which z_i <= 0; returns the crossed end of the bracket.
+  double locate(int i, double ta, double span_s, const Modes& m, const Inputs& u, StepReport& r) {
+    double lo = 0.0, hi = span_s;
+    double z_lo = za_[i], z_hi = zb_[i];
+    int side = 0;  // Illinois: which end was kept last time
+    for (int it = 0; it < kMaxLocateIterations && hi - lo > tol_s_; ++it) {
+      double mid = (it % 3 == 2) ? 0.5 * (lo + hi) : lo + (hi - lo) * z_lo / (z_lo - z_hi);
+      if (!(mid > lo && mid < hi)) mid = 0.5 * (lo + hi);
+      xm_ = xa_;
+      integrate(ta, mid, m, u, xm_, r);
+      plant_.crossings(ta + mid, xm_, m, u, zm_.data());
+      const double z = zm_[i];
+      if (z <= 0.0) {
+        hi = mid;
+        z_hi = z;
+        if (side == -1) z_lo *= 0.5;
+        side = -1;
+      } else {
+        lo = mid;
+        z_lo = z;
+        if (side == 1) z_hi *= 0.5;
+        side = 1;
+      }
+    }
+    return hi;
+  }
+
+  const Plant& plant_;
+  Integrator& integ_;
+  double t0_s_, h_s_, tol_s_;
+  State xa_, xb_, xm_;
+  std::array<double, (kNumZ > 0 ? kNumZ : 1)> za_{}, zb_{}, zm_{};
+};
+
+}  // namespace ehpt::solvers

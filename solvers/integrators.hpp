@@ -1,0 +1,109 @@
+#pragma once
+// Fixed-step integrators over a plant (STYLE.md §6). A plant provides:
+//   static constexpr int kNumStates, kNumCrossings;
+//   using State = Eigen::Matrix<double, kNumStates, 1>;  struct Modes;  struct Inputs;
+//   void derivatives(double t_s, const State& x, const Modes&, const Inputs&, State& dx) const;
+// Modes and inputs are held constant over a step. Both integrators own their scratch, so a
+// step allocates nothing, and neither throws: failures come back in IntegratorStatus.
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Core>
+#include <Eigen/LU>
+
+namespace ehpt::solvers {
+
+struct IntegratorStatus {
+  bool converged = true;  // implicit Euler: Newton met its tolerance within the cap
+  int iterations = 0;     // Newton iterations (0 for RK4)
+};
+
+// Classical fourth-order Runge-Kutta.
+template <class Plant>
+class Rk4 {
+ public:
+  using State = typename Plant::State;
+  using Modes = typename Plant::Modes;
+  using Inputs = typename Plant::Inputs;
+
+  explicit Rk4(const Plant& plant) : plant_(plant) {}
+
+  // Run phase: x(t_s) -> x(t_s + h_s).
+  IntegratorStatus step(double t_s, double h_s, const Modes& m, const Inputs& u, State& x) {
+    const double half_s = 0.5 * h_s;
+    plant_.derivatives(t_s, x, m, u, k1_);
+    tmp_ = x + half_s * k1_;
+    plant_.derivatives(t_s + half_s, tmp_, m, u, k2_);
+    tmp_ = x + half_s * k2_;
+    plant_.derivatives(t_s + half_s, tmp_, m, u, k3_);
+    tmp_ = x + h_s * k3_;
+    plant_.derivatives(t_s + h_s, tmp_, m, u, k4_);
+    x += (h_s / 6.0) * (k1_ + 2.0 * k2_ + 2.0 * k3_ + k4_);
+    return {};
+  }
+
+ private:
+  const Plant& plant_;
+  State k1_, k2_, k3_, k4_, tmp_;
+};
+
+// Implicit (backward) Euler: solves g(x) = x - x0 - h f(t + h, x) = 0 by Newton.
+// The Jacobian dg/dx = I - h df/dx is built by forward differences once per step and
+// factorised with PartialPivLU (fixed size, no heap); the iteration is capped.
+template <class Plant>
+class ImplicitEuler {
+ public:
+  using State = typename Plant::State;
+  using Modes = typename Plant::Modes;
+  using Inputs = typename Plant::Inputs;
+  static constexpr int N = Plant::kNumStates;
+  using Matrix = Eigen::Matrix<double, N, N>;
+
+  explicit ImplicitEuler(const Plant& plant, int max_iterations = 20, double tolerance = 1e-10)
+      : plant_(plant), max_iterations_(max_iterations), tolerance_(tolerance) {}
+
+  // Run phase: x(t_s) -> x(t_s + h_s).
+  IntegratorStatus step(double t_s, double h_s, const Modes& m, const Inputs& u, State& x) {
+    const double t1_s = t_s + h_s;
+    x0_ = x;
+    // Jacobian of f at the start point, by forward differences
+    plant_.derivatives(t1_s, x0_, m, u, f_);
+    for (int j = 0; j < N; ++j) {
+      xp_ = x0_;
+      const double delta = 1.5e-8 * std::max(1.0, std::abs(x0_[j]));
+      xp_[j] += delta;
+      plant_.derivatives(t1_s, xp_, m, u, fp_);
+      jac_.col(j) = -h_s * (fp_ - f_) / delta;
+    }
+    jac_ += Matrix::Identity();
+    lu_.compute(jac_);
+    // Newton from the explicit Euler predictor
+    x = x0_ + h_s * f_;
+    IntegratorStatus status{false, 0};
+    for (int it = 1; it <= max_iterations_; ++it) {
+      plant_.derivatives(t1_s, x, m, u, f_);
+      g_ = x - x0_ - h_s * f_;
+      dx_ = lu_.solve(g_);
+      x -= dx_;
+      status.iterations = it;
+      bool small = true;
+      for (int i = 0; i < N; ++i) small = small && std::abs(dx_[i]) <= tolerance_ * (1.0 + std::abs(x[i]));
+      if (small) {
+        status.converged = true;
+        break;
+      }
+    }
+    return status;
+  }
+
+ private:
+  const Plant& plant_;
+  int max_iterations_;
+  double tolerance_;
+  State x0_, xp_, f_, fp_, g_, dx_;
+  Matrix jac_;
+  Eigen::PartialPivLU<Matrix> lu_;
+};
+
+}  // namespace ehpt::solvers

@@ -1,0 +1,50 @@
+// Zero heap allocations in the run phase: a counting operator new (support/alloc_counter.cpp)
+// around 1e5 steps after start-up, for every plant and solver.
+#include <gtest/gtest.h>
+
+#include "alloc_counter.hpp"
+#include "hil/config.hpp"
+#include "hil/runner.hpp"
+#include "plant/bev_plant.hpp"
+#include "plant/drive_rigs.hpp"
+#include "solvers/integrators.hpp"
+#include "test_plants.hpp"
+
+namespace ehpt::hil {
+namespace {
+
+template <class Plant, class Integrator>
+std::size_t allocations_over_run(const Plant& plant, std::int64_t steps) {
+  std::vector<int> columns{0, 1, 2};
+  Runner<Plant, Integrator> runner(plant, 1e-3, steps, 100, columns, steps);  // start-up: may allocate
+  const std::size_t before = test::allocation_count();
+  runner.run();  // run phase
+  const std::size_t after = test::allocation_count();
+  EXPECT_EQ(runner.step_index(), steps);
+  return after - before;
+}
+
+TEST(NoAllocation, BevWithBothSolvers) {
+  const plant::BevPlant plant(test::mbev("data/cycles/cycle_nedc.csv"));
+  EXPECT_EQ((allocations_over_run<plant::BevPlant, solvers::Rk4<plant::BevPlant>>(plant, 100000)), 0u);
+  EXPECT_EQ((allocations_over_run<plant::BevPlant, solvers::ImplicitEuler<plant::BevPlant>>(plant, 100000)), 0u);
+}
+
+TEST(NoAllocation, DriveRig) {
+  Scenario sc;
+  std::vector<std::string> errors;
+  ASSERT_TRUE(load_scenario(test::source_path("scenarios/one_flange_test.toml"), {}, sc, errors));
+  const plant::DriveRig rig(std::get<plant::DriveRigParams>(sc.plant));
+  EXPECT_EQ((allocations_over_run<plant::DriveRig, solvers::Rk4<plant::DriveRig>>(rig, 50000)), 0u);
+}
+
+TEST(NoAllocation, TheCounterSeesAllocations) {
+  const std::size_t before = test::allocation_count();
+  std::vector<double> v(100, 1.0);
+  v.push_back(2.0);  // grows: a second allocation
+  EXPECT_EQ(v.size(), 101u);
+  EXPECT_GE(test::allocation_count() - before, 2u);
+}
+
+}  // namespace
+}  // namespace ehpt::hil

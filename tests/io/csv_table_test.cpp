@@ -1,0 +1,75 @@
+#include "io/csv_table.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "io/number_format.hpp"
+
+namespace ehpt::io {
+namespace {
+
+std::string write_temp(const std::string& name, const std::string& content) {
+  const auto dir = std::filesystem::temp_directory_path() / "ehpt_io_test";
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / name).string();
+  std::ofstream(path) << content;
+  return path;
+}
+
+TEST(CsvTable, ReadsHeaderColumnsAndLines) {
+  const std::string path = write_temp("ok.csv", "time_s,speed_kmh\n# comment\n0,0\n\n5.39, 20\n");
+  CsvTable t;
+  std::vector<std::string> errors;
+  ASSERT_TRUE(read_csv_table(path, t, errors));
+  EXPECT_EQ(t.header, (std::vector<std::string>{"time_s", "speed_kmh"}));
+  EXPECT_EQ(t.rows(), 2u);
+  EXPECT_EQ(t.lines, (std::vector<int>{3, 5}));
+  EXPECT_DOUBLE_EQ(t.columns[1][1], 20.0);
+  EXPECT_EQ(t.column_index("speed_kmh"), 1);
+  EXPECT_EQ(t.column_index("nope"), -1);
+}
+
+TEST(CsvTable, ReportsEveryBadFieldWithFileLineAndColumn) {
+  const std::string path = write_temp("bad.csv", "time_s,speed_kmh\n0,0\n1,\"12,5\"\n2,abc\n3\n");
+  CsvTable t;
+  std::vector<std::string> errors;
+  EXPECT_FALSE(read_csv_table(path, t, errors));
+  ASSERT_EQ(errors.size(), 3u);
+  EXPECT_EQ(errors[0], path + ":3: 3 fields, expected 2 as in the header");
+  EXPECT_EQ(errors[1], path + ":4: column speed_kmh: \"abc\" is not a number");
+  EXPECT_EQ(errors[2], path + ":5: 1 fields, expected 2 as in the header");
+}
+
+TEST(CsvTable, EmptyAndMissingFiles) {
+  CsvTable t;
+  std::vector<std::string> errors;
+  EXPECT_FALSE(read_csv_table(write_temp("empty.csv", ""), t, errors));
+  EXPECT_FALSE(read_csv_table(write_temp("header.csv", "time_s,speed_kmh\n"), t, errors));
+  EXPECT_FALSE(read_csv_table("/nonexistent/x.csv", t, errors));
+  ASSERT_EQ(errors.size(), 3u);
+  EXPECT_NE(errors[0].find("empty file"), std::string::npos);
+  EXPECT_NE(errors[1].find("no data rows"), std::string::npos);
+  EXPECT_NE(errors[2].find("/nonexistent/x.csv: cannot open"), std::string::npos);
+}
+
+TEST(NumberFormat, ShortestRoundTripAndStrictParse) {
+  for (double v : {0.1, 1.0 / 3.0, -2.5e-300, 123456789.123, 0.0}) {
+    double back = 0.0;
+    ASSERT_TRUE(parse_number(number_text(v), back));
+    EXPECT_EQ(back, v);
+  }
+  EXPECT_EQ(number_text(0.1), "0.1");
+  EXPECT_EQ(number_text(std::nan("")), "nan");
+  double v = 0.0;
+  EXPECT_FALSE(parse_number("12,5", v));
+  EXPECT_FALSE(parse_number("", v));
+  EXPECT_FALSE(parse_number("1.0x", v));
+  EXPECT_TRUE(parse_number(" +4.5 ", v));
+  EXPECT_EQ(v, 4.5);
+}
+
+}  // namespace
+}  // namespace ehpt::io

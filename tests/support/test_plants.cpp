@@ -1,0 +1,19 @@
+#include "test_plants.hpp"
+
+#include <stdexcept>
+
+#include "hil/config.hpp"
+
+namespace ehpt::test {
+
+plant::BevParams mbev(const std::string& cycle_file) {
+  hil::Scenario sc;
+  std::vector<std::string> errors;
+  if (!hil::load_scenario(source_path("scenarios/ev_sort1.toml"), {"cycle=\"" + source_path(cycle_file) + "\""}, sc,
+                          errors)) {
+    throw std::runtime_error(errors.empty() ? "load failed" : errors.front());
+  }
+  return std::get<plant::BevParams>(sc.plant);
+}
+
+}  // namespace ehpt::test

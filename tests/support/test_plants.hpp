@@ -1,0 +1,15 @@
+#pragma once
+// Parameter sets shared by several tests (the shipped MBEV, a coast-down vehicle, cycles).
+
+#include <string>
+
+#include "plant/bev_plant.hpp"
+
+namespace ehpt::test {
+
+inline std::string source_path(const std::string& rel) { return std::string(EHPT_SOURCE_DIR) + "/" + rel; }
+
+// MBEV as in vehicles/mbev.toml, loaded through the real loader with the given cycle.
+plant::BevParams mbev(const std::string& cycle_file = "data/cycles/cycle_sort1.csv");
+
+}  // namespace ehpt::test

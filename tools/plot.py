@@ -1,0 +1,292 @@
+#!/usr/bin/python3
+"""Draw PNG figures from an ehpt run folder.
+
+Usage: /usr/bin/python3 tools/plot.py DIR [--quiet]
+
+DIR must hold timeseries.csv (header of column names, then numeric rows) and
+usually summary.json.  Vehicle runs (column speed_m_s etc.) give speed, torque,
+power, soc and locked figures; drive-rig runs (TestMBOneFlange/TestTwoFlange,
+column tauElectrical_Nm etc.) give torque, power and efficiency figures.
+A figure whose columns are absent from the CSV is skipped silently.
+"""
+import csv
+import json
+import os
+import sys
+import tempfile
+
+import matplotlib
+matplotlib.use("Agg")  # no display needed
+import matplotlib.pyplot as plt
+import numpy as np
+
+LIMIT_STATES = ["torque", "power", "speed ramp", "over speed"]
+# Columns that only drive-rig runs write; anything else is treated as a vehicle run.
+RIG_COLUMNS = {"tauElectrical_Nm", "genTauRef_Nm", "motTauRef_Nm", "genTauLim_Nm",
+               "motTauLim_Nm", "limit_state", "genW_rad_s", "motW_rad_s",
+               "power_mech_W", "power_dc_W", "efficiency"}
+
+
+class PlotError(Exception):
+    pass
+
+
+def load_csv(path):
+    """Return {column name: float array}; unparsable fields become NaN."""
+    if not os.path.exists(path):
+        raise PlotError(f"{path}: file not found")
+    if not os.path.isfile(path):
+        raise PlotError(f"{path}: not a regular file")
+    try:
+        with open(path, newline="") as f:
+            rows = list(csv.reader(f))
+    except (OSError, UnicodeDecodeError, csv.Error) as e:
+        raise PlotError(f"{path}: cannot read as CSV ({e})")
+    rows = [r for r in rows if r and any(x.strip() for x in r)]
+    if not rows:
+        raise PlotError(f"{path}: file is empty")
+    header = [h.strip() for h in rows[0]]
+    data, skipped = [], 0
+    for r in rows[1:]:
+        if len(r) != len(header):  # e.g. a truncated last line
+            skipped += 1
+            continue
+        try:
+            data.append([float(x) for x in r])
+        except ValueError:
+            vals = []
+            for x in r:
+                try:
+                    vals.append(float(x))
+                except ValueError:
+                    vals.append(float("nan"))
+            data.append(vals)
+    if skipped:
+        print(f"plot.py: warning: {path}: skipped {skipped} row(s) with wrong field count",
+              file=sys.stderr)
+    if not data:
+        raise PlotError(f"{path}: no data rows")
+    arr = np.array(data, dtype=float)
+    arr[np.isinf(arr)] = np.nan  # inf would wreck the axis autoscaling
+    return {name: arr[:, i] for i, name in enumerate(header) if name}
+
+
+def load_summary(path):
+    """Return the summary dict, or {} if it is missing or unreadable."""
+    try:
+        with open(path) as f:
+            s = json.load(f)
+        return s if isinstance(s, dict) else {}
+    except (OSError, ValueError):
+        return {}
+
+
+class Plotter:
+    def __init__(self, out_dir, cols, scenario, quiet):
+        self.dir, self.c, self.scenario, self.quiet = out_dir, cols, scenario, quiet
+        self.written = 0
+        if "time_s" in cols:
+            self.t, self.tlabel = cols["time_s"], "time [s]"
+        else:
+            n = len(next(iter(cols.values())))
+            self.t, self.tlabel = np.arange(n, dtype=float), "sample"
+
+    def has(self, *names):
+        return all(n in self.c for n in names)
+
+    def first(self, *names):
+        """Name of the first of names present in the CSV, else None."""
+        return next((n for n in names if n in self.c), None)
+
+    def figure(self, nrows, title):
+        """Figure with nrows stacked axes sharing the time axis."""
+        fig, axes = plt.subplots(nrows, 1, figsize=(10, 6), dpi=100, sharex=True,
+                                 squeeze=False,
+                                 gridspec_kw={"height_ratios": [2] + [1] * (nrows - 1)})
+        axes = list(axes[:, 0])
+        fig.suptitle(f"{self.scenario}: {title}" if self.scenario else title)
+        for ax in axes:
+            ax.grid(True, alpha=0.4)
+        axes[-1].set_xlabel(self.tlabel)
+        return fig, axes
+
+    def limit_state(self, ax, name):
+        ax.step(self.t, self.c[name], where="post", color="tab:purple", label=name)
+        ax.set_yticks(range(len(LIMIT_STATES)))
+        ax.set_yticklabels(LIMIT_STATES)
+        ax.set_ylim(-0.3, len(LIMIT_STATES) - 0.7)
+        ax.set_ylabel("limiter state")
+
+    def save(self, fig, name):
+        """Write DIR/name via a temporary file so no half-written PNG appears."""
+        for ax in fig.axes:
+            if ax.get_legend_handles_labels()[0]:
+                ax.legend(loc="best", fontsize="small")
+        fig.tight_layout()
+        target = os.path.join(self.dir, name)
+        fd, tmp = tempfile.mkstemp(prefix="." + name + ".", suffix=".tmp", dir=self.dir)
+        try:
+            with os.fdopen(fd, "wb") as f:
+                fig.savefig(f, format="png")
+            umask = os.umask(0)
+            os.umask(umask)
+            os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; use the usual mode
+            os.replace(tmp, target)
+        except BaseException:
+            if os.path.exists(tmp):
+                os.remove(tmp)
+            raise
+        finally:
+            plt.close(fig)
+        self.written += 1
+        if not self.quiet:
+            print(f"wrote {target}")
+
+    # ---------------------------------------------------------------- vehicle runs
+    def vehicle(self):
+        c, t = self.c, self.t
+        # Wanted vs actual speed, plus the speed error when both are present.
+        if self.first("speed_m_s", "speed_ref_m_s"):
+            both = self.has("speed_m_s", "speed_ref_m_s")
+            fig, axes = self.figure(2 if both else 1, "vehicle speed")
+            if "speed_ref_m_s" in c:
+                axes[0].plot(t, c["speed_ref_m_s"] * 3.6, "--", color="tab:gray", label="wanted")
+            if "speed_m_s" in c:
+                axes[0].plot(t, c["speed_m_s"] * 3.6, color="tab:blue", label="actual")
+            axes[0].set_ylabel("speed [km/h]")
+            if both:
+                axes[1].plot(t, (c["speed_m_s"] - c["speed_ref_m_s"]) * 3.6, color="tab:red",
+                             label="actual - wanted")
+                axes[1].set_ylabel("speed error [km/h]")
+            self.save(fig, "speed.png")
+
+        # Requested vs delivered torque with the +/- limit, plus the limiter state.
+        if self.first("driver_request_Nm", "drive_torque_Nm", "drive_torque_limit_Nm"):
+            self.torque("driver_request_Nm", "drive_torque_Nm", "drive_torque_limit_Nm",
+                        "drive_limit_state", "drive torque")
+
+        # Mechanical vs electrical drive power (and battery terminal power).
+        pw = [(n, lbl, ls) for n, lbl, ls in (("drive_power_mech_W", "drive mechanical", "-"),
+                                              ("drive_power_dc_W", "drive electrical (DC)", "-"),
+                                              ("battery_power_W", "battery terminal", "--"))
+              if n in c]
+        if pw:
+            fig, axes = self.figure(1, "power")
+            for n, lbl, ls in pw:  # dashed battery line: it often sits on the DC line
+                axes[0].plot(t, c[n] / 1000.0, ls, label=lbl)
+            axes[0].set_ylabel("power [kW]")
+            self.save(fig, "power.png")
+
+        # State of charge, plus battery voltage.
+        if "soc" in c:
+            volt = "battery_voltage_V" in c
+            fig, axes = self.figure(2 if volt else 1, "battery state of charge")
+            axes[0].plot(t, c["soc"] * 100.0, color="tab:green", label="SoC")
+            axes[0].set_ylabel("SoC [%]")
+            axes[0].ticklabel_format(axis="y", useOffset=False)
+            if volt:
+                axes[1].plot(t, c["battery_voltage_V"], color="tab:orange", label="terminal voltage")
+                if "battery_emf_V" in c:
+                    axes[1].plot(t, c["battery_emf_V"], "--", color="tab:gray", label="EMF")
+                axes[1].set_ylabel("voltage [V]")
+            self.save(fig, "soc.png")
+
+        # Locked (standstill) flag with speed on a twin axis for context.
+        if "locked" in c:
+            fig, axes = self.figure(1, "vehicle locked at standstill")
+            speed = "speed_m_s" in c
+            axes[0].step(t, c["locked"], where="post", color="tab:red",
+                         label=None if speed else "locked")
+            axes[0].set_yticks([0, 1])
+            axes[0].set_ylim(-0.1, 1.1)
+            axes[0].set_ylabel("locked flag [0/1]")
+            if speed:
+                # one legend, on the twin axis (drawn on top), with a proxy for the flag
+                ax2 = axes[0].twinx()
+                ax2.plot([], [], color="tab:red", label="locked (left axis)")
+                ax2.plot(t, c["speed_m_s"] * 3.6, color="tab:blue", alpha=0.6,
+                         label="speed (right axis)")
+                ax2.set_ylabel("speed [km/h]")
+            self.save(fig, "locked.png")
+
+    def torque(self, req, deliv, lim, state, title):
+        """torque.png: request, delivered, dashed +/- limit; limiter state subplot."""
+        c, t = self.c, self.t
+        have_state = state is not None and state in c
+        fig, axes = self.figure(2 if have_state else 1, title)
+        if req in c:
+            # wide pale line so the request stays visible when delivered == request
+            axes[0].plot(t, c[req], color="tab:orange", lw=4, alpha=0.45, label=f"request ({req})")
+        if deliv in c:
+            axes[0].plot(t, c[deliv], color="tab:blue", label=f"delivered ({deliv})")
+        if lim in c:
+            axes[0].plot(t, c[lim], "--", color="tab:red", label=f"limit ± ({lim})")
+            axes[0].plot(t, -c[lim], "--", color="tab:red")
+        axes[0].set_ylabel("torque [N m]")
+        if have_state:
+            self.limit_state(axes[1], state)
+        self.save(fig, "torque.png")
+
+    # ---------------------------------------------------------------- drive-rig runs
+    def rig(self):
+        c, t = self.c, self.t
+        req = self.first("genTauRef_Nm", "motTauRef_Nm")
+        lim = self.first("genTauLim_Nm", "motTauLim_Nm")
+        if req or lim or "tauElectrical_Nm" in c:
+            self.torque(req, "tauElectrical_Nm", lim, "limit_state", "drive torque")
+
+        # Mechanical vs electrical power, plus shaft speed.
+        speed = self.first("genW_rad_s", "motW_rad_s")
+        if self.first("power_mech_W", "power_dc_W"):
+            fig, axes = self.figure(2 if speed else 1, "power")
+            if "power_mech_W" in c:
+                axes[0].plot(t, c["power_mech_W"] / 1000.0, label="mechanical")
+            if "power_dc_W" in c:
+                axes[0].plot(t, c["power_dc_W"] / 1000.0, "--", label="electrical (DC)")
+            axes[0].set_ylabel("power [kW]")
+            if speed:
+                axes[1].plot(t, c[speed], color="tab:green", label=speed)
+                axes[1].set_ylabel("shaft speed [rad/s]")
+            self.save(fig, "power.png")
+
+        # Efficiency, blanked where the shaft power is too small to mean anything.
+        if "efficiency" in c:
+            eff = c["efficiency"].copy()
+            if "power_mech_W" in c:
+                eff[~(np.abs(c["power_mech_W"]) > 1.0)] = np.nan
+            fig, axes = self.figure(1, "drive efficiency")
+            axes[0].plot(t, eff * 100.0, color="tab:blue", label="efficiency (|P_mech| > 1 W)")
+            axes[0].set_ylabel("efficiency [%]")
+            self.save(fig, "efficiency.png")
+
+
+def main(argv):
+    args = [a for a in argv if a != "--quiet"]
+    quiet = len(args) != len(argv)
+    if len(args) != 1 or args[0].startswith("-"):
+        print("usage: /usr/bin/python3 tools/plot.py DIR [--quiet]", file=sys.stderr)
+        return 2
+    out_dir = args[0]
+    cols = load_csv(os.path.join(out_dir, "timeseries.csv"))
+    scenario = load_summary(os.path.join(out_dir, "summary.json")).get("scenario")
+    p = Plotter(out_dir, cols, str(scenario) if scenario else "", quiet)
+    if RIG_COLUMNS & cols.keys():
+        p.rig()
+    else:
+        p.vehicle()
+    if p.written == 0 and not quiet:
+        print(f"plot.py: note: no plottable columns in {out_dir}/timeseries.csv", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    try:
+        sys.exit(main(sys.argv[1:]))
+    except PlotError as e:
+        print(f"plot.py: error: {e}", file=sys.stderr)
+        sys.exit(1)
+    except KeyboardInterrupt:
+        sys.exit(130)
+    except Exception as e:  # bad input must never end in a traceback
+        print(f"plot.py: error: {type(e).__name__}: {e}", file=sys.stderr)
+        sys.exit(1)
