@@ -80,23 +80,6 @@ void validate(const BatteryRcParams& p, const std::string& at, Problems& problem
   }
 }
 
-BatteryTerminal BatteryRc::terminal(double emf_V, double v_rc_V, double load_power_W) const {
-  BatteryTerminal b;
-  const double v_int = emf_V - v_rc_V;
-  double disc = v_int * v_int - 4.0 * c_.r0_Ohm * load_power_W;
-  if (disc < 0.0) {
-    // beyond the maximum power point: hold at it and flag (the runner stops the run)
-    b.feasible = false;
-    disc = 0.0;
-  }
-  b.voltage_V = 0.5 * (v_int + std::sqrt(disc));
-  b.current_A = load_power_W / b.voltage_V;
-  b.parasitic_A = c_.k_parasitic * std::abs(b.current_A);
-  b.main_A = b.current_A + b.parasitic_A;
-  b.loss_W = c_.r0_Ohm * b.current_A * b.current_A + v_rc_V * v_rc_V * inv_r1_Ohm_ + v_int * b.parasitic_A;
-  return b;
-}
-
 BatteryTerminal BatteryRc::at_current(double emf_V, double v_rc_V, double current_A) const {
   BatteryTerminal b;
   const double v_int = emf_V - v_rc_V;

@@ -1,5 +1,6 @@
 #include "plant/bev_plant.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace ehpt::plant {
@@ -90,8 +91,8 @@ BevPlant::Modes BevPlant::initial_modes(const State& x0) const {
   return Modes{x0[kSpeed] > 0.0 ? Motion::kForward : Motion::kStuck};
 }
 
-// Run phase: no allocation.
-BevPlant::Eval BevPlant::evaluate(double t_s, const State& x, const Modes& m) const {
+// Run phase: no allocation. Always inlined, so that each caller computes only what it uses.
+[[gnu::always_inline]] inline BevPlant::Eval BevPlant::evaluate(double t_s, const State& x, const Modes& m) const {
   Eval e;
   const double v = x[kSpeed];
   // driver and drive: the driver's request is a shaft torque, the limiter may cut it
@@ -127,6 +128,17 @@ BevPlant::Eval BevPlant::evaluate(double t_s, const State& x, const Modes& m) co
   return e;
 }
 
+BevPlant::AtRest BevPlant::at_rest(double t_s, const State& x) const {
+  // same equations as evaluate() with v = 0: drive speed 0, so the limit is tau_max (state 0)
+  const double request_Nm = drive(p_.driver, t_s, 0.0).request;
+  const double tau_max_Nm = drive_.params().torque_max_Nm;
+  const double torque_Nm = std::clamp(request_Nm, -tau_max_Nm, tau_max_Nm);
+  const double unmet_braking_Nm = torque_Nm - request_Nm;
+  const double brake_N = unmet_braking_Nm > 0.0 ? brake_gain_ * unmet_braking_Nm : 0.0;
+  const double grade_rad = road_.grade_rad(x[kDistance]);
+  return {torque_Nm * g_over_r_ - road_.grade_force_N(grade_rad), road_.rolling_N(grade_rad) + brake_N};
+}
+
 void BevPlant::derivatives(double t_s, const State& x, const Modes& m, const Inputs&, State& dx) const {
   const Eval e = evaluate(t_s, x, m);
   const double v = x[kSpeed];
@@ -153,8 +165,8 @@ void BevPlant::crossings(double t_s, const State& x, const Modes& m, const Input
       z[0] = -x[kSpeed];
       break;
     case Motion::kStuck: {
-      const Eval e = evaluate(t_s, x, m);
-      z[0] = (e.rolling_N + e.brake_N) - std::abs(e.applied_N);
+      const AtRest r = at_rest(t_s, x);
+      z[0] = r.breakaway_N - std::abs(r.applied_N);
       break;
     }
   }
@@ -162,13 +174,10 @@ void BevPlant::crossings(double t_s, const State& x, const Modes& m, const Input
 
 void BevPlant::on_crossing(int, double t_s, State& x, Modes& m, const Inputs&) const {
   if (m.motion != Motion::kStuck) x[kSpeed] = 0.0;  // came to rest: exactly zero
-  // at rest (just stopped or stuck): stay, or start in the direction of the applied force
-  const Modes stuck{Motion::kStuck};
-  const Eval e = evaluate(t_s, x, stuck);
-  const Motion next = motion_at_rest(e.applied_N, e.rolling_N + e.brake_N);
-  // leaving the stuck mode needs the force to exceed the threshold; a crossing that fired
-  // from the stuck mode does so by construction, one from motion may stay stuck
-  m.motion = next;
+  // at rest (just stopped or stuck): stay, or start in the direction of the applied force;
+  // a crossing that fired from the stuck mode starts by construction, a stop may stay stuck
+  const AtRest r = at_rest(t_s, x);
+  m.motion = motion_at_rest(r.applied_N, r.breakaway_N);
 }
 
 void BevPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs&, Outputs& y) const {

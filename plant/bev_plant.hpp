@@ -105,6 +105,12 @@ class BevPlant {
  private:
   struct Eval;  // everything one evaluation computes
   Eval evaluate(double t_s, const State& x, const Modes& m) const;
+  // At rest (v = 0): the force the road must hold, and the break-away threshold. A lean
+  // version of evaluate() for the stuck-mode crossing, which runs twice per step.
+  struct AtRest {
+    double applied_N, breakaway_N;
+  };
+  AtRest at_rest(double t_s, const State& x) const;
 
   BevParams p_;
   MapDrive drive_;

@@ -6,7 +6,8 @@ namespace ehpt::plant {
 
 double trapezoid(const Trapezoid& tr, double t_s) {
   if (t_s < tr.start_s) return tr.offset;
-  const double tau = std::fmod(t_s - tr.start_s, tr.period_s);
+  double tau = t_s - tr.start_s;
+  if (tau >= tr.period_s) tau = std::fmod(tau, tr.period_s);  // fmod is slow; most runs are one period
   if (tau < tr.rising_s) return tr.offset + tr.amplitude * tau / tr.rising_s;
   if (tau < tr.rising_s + tr.width_s) return tr.offset + tr.amplitude;
   if (tau < tr.rising_s + tr.width_s + tr.falling_s) {
@@ -87,8 +88,8 @@ DriveRig::State DriveRig::initial_state() const {
   return x;
 }
 
-// Run phase: no allocation.
-DriveRig::Eval DriveRig::evaluate(double t_s, const State& x) const {
+// Run phase: no allocation. Always inlined, so that each caller computes only what it uses.
+[[gnu::always_inline]] inline DriveRig::Eval DriveRig::evaluate(double t_s, const State& x) const {
   Eval e{};
   const double w = x[kSpeed];
   e.tau_ref_Nm = trapezoid(p_.request_Nm, t_s);

@@ -26,12 +26,16 @@
 // The DC interface is an ideal constant-power load (§1.6 recommendation); the battery node
 // is solved algebraically in battery_rc.hpp.
 
+#include <algorithm>
+#include <cmath>
 #include <string>
 
 #include "plant/problems.hpp"
 #include "plant/table.hpp"
 
 namespace ehpt::plant {
+
+inline constexpr double kEfficiencyFloor = 0.01;  // §1.4: avoid dividing by ~0 outside the map
 
 enum class DriveLossModel { kIdeal, kMap, kFormula };
 
@@ -106,5 +110,52 @@ struct MotBus {
   double motW_rad_s = 0.0;
   double motTauLim_Nm = 0.0;
 };
+
+// ---- run phase, inline so the plant's derivative function can be optimised as a whole ----
+
+[[gnu::always_inline]] inline TorqueLimit MapDrive::torque_limit(double speed_rad_s) const {
+  const double w = std::abs(speed_rad_s);
+  if (w > p_.speed_max_rad_s) {
+    const double ramp = (w - p_.speed_max_rad_s) * inv_ramp_rad_s_;
+    if (ramp < 1.0) return {power_over_speed_max_Nm_ * (1.0 - ramp), 2};
+    return {0.0, 3};
+  }
+  if (w < base_speed_rad_s_) return {p_.torque_max_Nm, 0};
+  return {p_.power_max_W / w, 1};
+}
+[[gnu::always_inline]] inline double MapDrive::efficiency(double torque_Nm, double speed_rad_s) const {
+  switch (p_.loss_model) {
+    case DriveLossModel::kIdeal:
+      return 1.0;
+    case DriveLossModel::kMap: {
+      const double eta = p_.efficiency_map(std::abs(torque_Nm) * inv_torque_max_, std::abs(speed_rad_s) * inv_speed_max_);
+      return std::max(eta, kEfficiencyFloor);
+    }
+    case DriveLossModel::kFormula: {
+      const double tu = std::abs(torque_Nm) * inv_torque_max_;
+      const double wu = std::abs(speed_rad_s) * inv_speed_max_;
+      const double pu = tu * wu;
+      const LossFormula& f = p_.loss_formula;
+      const double loss_pu = f.a + f.b_t * tu * tu + f.b_w * wu * wu + f.b_p * pu * pu;
+      // at zero torque or speed P_mech = 0 as well: report eta = 1 there (no power flows)
+      if (pu == 0.0) return 1.0;
+      return std::max(pu / (pu + loss_pu), kEfficiencyFloor);
+    }
+  }
+  return 1.0;
+}
+[[gnu::always_inline]] inline DriveOperatingPoint MapDrive::operate(double torque_request_Nm, double speed_rad_s) const {
+  const TorqueLimit lim = torque_limit(speed_rad_s);
+  DriveOperatingPoint op;
+  op.torque_Nm = std::clamp(torque_request_Nm, -lim.torque_Nm, lim.torque_Nm);
+  op.limit_Nm = lim.torque_Nm;
+  op.limit_state = lim.state;
+  op.limiting = std::abs(op.torque_Nm - torque_request_Nm) > 1e-15;
+  op.power_mech_W = op.torque_Nm * speed_rad_s;
+  op.efficiency = efficiency(op.torque_Nm, speed_rad_s);
+  // motoring: losses added; generating: losses subtracted (§1.4)
+  op.power_dc_W = op.power_mech_W > 0.0 ? op.power_mech_W / op.efficiency : op.power_mech_W * op.efficiency;
+  return op;
+}
 
 }  // namespace ehpt::plant

@@ -7,16 +7,30 @@ namespace ehpt::plant {
 AxisIndex::AxisIndex(const std::vector<double>& x) {
   // only for axes that passed validate(): at least 2 points, sorted, non-zero span
   if (x.size() < 2 || !(x.back() > x.front())) return;
-  const std::size_t buckets = std::min<std::size_t>(4 * x.size(), 1u << 16);
+  const std::size_t n = x.size();
+  last_ = n - 2;
   x0_ = x.front();
-  inv_width_ = static_cast<double>(buckets) / (x.back() - x.front());
+  const double span = x.back() - x.front();
+  uniform_ = true;
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    const double expected = x0_ + span * static_cast<double>(i) / static_cast<double>(n - 1);
+    uniform_ = uniform_ && std::abs(x[i] - expected) <= 1e-12 * span;
+  }
+  if (uniform_) {
+    buckets_ = static_cast<double>(n - 1);
+    inv_width_ = buckets_ / span;
+    return;
+  }
+  const std::size_t buckets = std::min<std::size_t>(16 * n, 1u << 18);
+  buckets_ = static_cast<double>(buckets);
+  inv_width_ = buckets_ / span;
   bucket_.resize(buckets);
   std::size_t i = 0;
   for (std::size_t k = 0; k < buckets; ++k) {
     // the last segment starting at or before the bucket's lower edge, with half a bucket of
     // margin so that rounding in segment() can never skip past the right segment
     const double lower = x0_ + (static_cast<double>(k) - 0.5) / inv_width_;
-    while (i + 2 < x.size() && x[i + 1] <= lower) ++i;
+    while (i + 2 < n && x[i + 1] <= lower) ++i;
     bucket_[k] = static_cast<std::uint32_t>(i);
   }
 }
@@ -27,19 +41,6 @@ Table1d::Table1d(std::vector<double> x, std::vector<double> y, Extrapolation ext
     const double dx = x_[i + 1] - x_[i];
     slope_.push_back(dx > 0.0 ? (y_[i + 1] - y_[i]) / dx : 0.0);
   }
-}
-
-double Table1d::operator()(double u) const {
-  const std::size_t n = x_.size();
-  if (n == 1) return y_[0];
-  if (extrapolation_ == Extrapolation::kHold) {
-    if (u <= x_.front()) return y_.front();
-    if (u >= x_.back()) return y_.back();
-  }
-  const std::size_t i = index_.segment(x_, u);
-  // a zero-length segment can only be the last one here (u at or past a repeated end)
-  if (!(x_[i + 1] > x_[i])) return y_[i + 1];
-  return y_[i] + slope_[i] * (u - x_[i]);
 }
 
 void validate(const Table1d& t, const std::string& field, bool allow_repeats, Problems& problems) {
@@ -72,18 +73,6 @@ Table2d::Table2d(std::vector<double> u1, std::vector<double> u2, std::vector<dou
     : u1_(std::move(u1)), u2_(std::move(u2)), v_(std::move(values)), index1_(u1_), index2_(u2_) {
   for (std::size_t i = 0; i + 1 < u1_.size(); ++i) inv_du1_.push_back(1.0 / (u1_[i + 1] - u1_[i]));
   for (std::size_t j = 0; j + 1 < u2_.size(); ++j) inv_du2_.push_back(1.0 / (u2_[j + 1] - u2_[j]));
-}
-
-double Table2d::operator()(double a, double b) const {
-  const std::size_t n2 = u2_.size();
-  const std::size_t i = index1_.segment(u1_, a);
-  const std::size_t j = index2_.segment(u2_, b);
-  // unclamped fractions give linear extrapolation from the last two grid lines
-  const double ta = (a - u1_[i]) * inv_du1_[i];
-  const double tb = (b - u2_[j]) * inv_du2_[j];
-  const double v00 = v_[i * n2 + j], v01 = v_[i * n2 + j + 1];
-  const double v10 = v_[(i + 1) * n2 + j], v11 = v_[(i + 1) * n2 + j + 1];
-  return (1.0 - ta) * ((1.0 - tb) * v00 + tb * v01) + ta * ((1.0 - tb) * v10 + tb * v11);
 }
 
 void validate(const Table2d& t, const std::string& field, Problems& problems) {

@@ -18,26 +18,31 @@
 
 namespace ehpt::plant {
 
-// Finds the segment of a sorted axis in O(1): a uniform bucket grid built at start-up maps
-// u to the first candidate segment, then a short forward scan finishes (repeats allowed).
+// Finds the segment of a sorted axis in O(1), without a binary search in the step loop.
+// An evenly spaced axis (maps, 1 Hz cycles) gives the index by one multiplication; any
+// other axis gets a bucket grid built at start-up that maps u to the first candidate
+// segment, and a short forward scan finishes (repeated values allowed).
 class AxisIndex {
  public:
   AxisIndex() = default;
   explicit AxisIndex(const std::vector<double>& x);
   // Run phase: the last i with x[i] <= u, kept within [0, n-2].
-  std::size_t segment(const std::vector<double>& x, double u) const {
-    double k = (u - x0_) * inv_width_;
+  std::size_t segment(const double* x, double u) const {
+    const double k = (u - x0_) * inv_width_;
     if (!(k > 0.0)) return 0;  // below the axis (or NaN)
-    const std::size_t last = x.size() - 2;
-    if (k >= static_cast<double>(bucket_.size())) return last;
-    std::size_t i = bucket_[static_cast<std::size_t>(k)];
-    while (i < last && x[i + 1] <= u) ++i;
+    if (k >= buckets_) return last_;
+    std::size_t i = static_cast<std::size_t>(k);
+    if (uniform_) return i < last_ ? i : last_;
+    i = bucket_[i];
+    while (i < last_ && x[i + 1] <= u) ++i;
     return i;
   }
 
  private:
-  double x0_ = 0.0, inv_width_ = 0.0;
-  std::vector<std::uint32_t> bucket_;  // first segment that can hold a u of this bucket
+  double x0_ = 0.0, inv_width_ = 0.0, buckets_ = 0.0;
+  std::size_t last_ = 0;               // n - 2
+  bool uniform_ = false;               // evenly spaced: bucket k is segment k
+  std::vector<std::uint32_t> bucket_;  // otherwise: first segment that can hold a u of bucket k
 };
 
 enum class Extrapolation { kLinear, kHold };
@@ -48,7 +53,14 @@ class Table1d {
   Table1d(std::vector<double> x, std::vector<double> y, Extrapolation extrapolation);
 
   // Run phase: no allocation.
-  double operator()(double x) const;
+  double operator()(double u) const {
+    if (extrapolation_ == Extrapolation::kHold) {
+      if (u <= x_.front()) return y_.front();
+      if (u >= x_.back()) return y_.back();
+    }
+    const std::size_t i = index_.segment(x_.data(), u);
+    return y_[i] + slope_[i] * (u - x_[i]);
+  }
 
   bool empty() const { return x_.empty(); }
   const std::vector<double>& x() const { return x_; }
@@ -59,7 +71,9 @@ class Table1d {
   std::vector<double> x_, y_;
   Extrapolation extrapolation_ = Extrapolation::kLinear;
   AxisIndex index_;
-  std::vector<double> slope_;  // (y[i+1] - y[i]) / (x[i+1] - x[i]); 0 on a zero-length segment
+  // (y[i+1] - y[i]) / (x[i+1] - x[i]); on a zero-length segment (a step) 0, and the segment
+  // is never chosen for u inside the axis because the scan moves past repeated values
+  std::vector<double> slope_;
 };
 
 // At least two rows, finite values, x non-decreasing (repeats allowed when
@@ -73,7 +87,19 @@ class Table2d {
   Table2d(std::vector<double> u1, std::vector<double> u2, std::vector<double> values);
 
   // Run phase: no allocation.
-  double operator()(double u1, double u2) const;
+  double operator()(double a, double b) const {
+    const std::size_t n2 = u2_.size();
+    const std::size_t i = index1_.segment(u1_.data(), a);
+    const std::size_t j = index2_.segment(u2_.data(), b);
+    // unclamped fractions give linear extrapolation from the last two grid lines
+    const double ta = (a - u1_[i]) * inv_du1_[i];
+    const double tb = (b - u2_[j]) * inv_du2_[j];
+    const double* r0 = v_.data() + i * n2 + j;
+    const double* r1 = r0 + n2;
+    const double lo = r0[0] + tb * (r0[1] - r0[0]);
+    const double hi = r1[0] + tb * (r1[1] - r1[0]);
+    return lo + ta * (hi - lo);
+  }
 
   bool empty() const { return u1_.empty(); }
   const std::vector<double>& u1() const { return u1_; }

@@ -33,7 +33,7 @@ TEST(Table1d, IndexedLookupMatchesBruteForceEverywhere) {
   std::uniform_real_distribution<double> step(0.0, 3.0);
   std::vector<double> x{0.0}, y{1.0};
   for (int i = 0; i < 300; ++i) {
-    x.push_back(x.back() + (i % 17 == 0 ? 0.0 : step(rng)));  // some repeats
+    x.push_back(x.back() + (i % 17 == 5 ? 0.0 : step(rng)));  // some repeats, not at the ends
     y.push_back(std::sin(0.1 * i));
   }
   const Table1d t(x, y, Extrapolation::kLinear);

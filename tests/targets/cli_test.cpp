@@ -29,7 +29,9 @@ std::string slurp(const std::string& path) {
 }
 
 Result ehpt(const std::string& args) {
-  const fs::path tmp = fs::temp_directory_path() / "ehpt_cli_test";
+  // one folder per test: ctest runs tests in parallel
+  const fs::path tmp = fs::temp_directory_path() /
+                       ("ehpt_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
   fs::create_directories(tmp);
   const std::string out = (tmp / "stdout").string(), err = (tmp / "stderr").string();
   const std::string cmd = std::string(EHPT_BINARY) + " " + args + " >" + out + " 2>" + err;
