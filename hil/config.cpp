@@ -464,7 +464,7 @@ plant::DriveRigParams read_rig(Reader& root, Context& ctx) {
 }
 
 // Gives plant/ problems the file and line their value came from.
-void report_plant_problems(const Problems& problems, Context& ctx) {
+void report_plant_problems(const Problems& problems, Context& ctx, std::vector<std::string>* sink = nullptr) {
   for (const plant::Problem& pr : problems.list()) {
     // a table whose file failed to read was reported already
     bool reported = false;
@@ -487,7 +487,11 @@ void report_plant_problems(const Problems& problems, Context& ctx) {
       if (auto w = ctx.where.find(pr.field); w != ctx.where.end()) loc = w->second;
     }
     if (loc.empty()) loc = "(vehicle)";
-    ctx.error(loc, pr.field, pr.value, pr.expected);
+    if (sink != nullptr) {
+      sink->push_back(loc + ": " + pr.field + " = " + pr.value + ": " + pr.expected);
+    } else {
+      ctx.error(loc, pr.field, pr.value, pr.expected);
+    }
   }
 }
 
@@ -575,7 +579,7 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
   Reader vr(vlayers, "", out.vehicle_path, ctx);
   vr.text("description", "");
   const std::string kind = vr.text("kind", "");
-  Problems problems;
+  Problems problems, warnings;
   if (kind == "bev") {
     if (out.cycle_path.empty()) ctx.error(path, "cycle", "", "missing (a vehicle with a driver needs a cycle file)");
     plant::BevParams p = read_bev(vr, out.cycle_path, ctx);
@@ -584,6 +588,7 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
       if (out.solver.duration_s == 0.0) out.solver.duration_s = p.driver.cycle_m_s.x().back();
     }
     plant::validate(p, problems);
+    if (problems.empty()) plant::warn(p.drive, "drive", warnings);
     check_signals(plant::BevPlant::kSignals, out.output.signals, ctx);
     out.plant = std::move(p);
   } else if (kind == "drive_rig") {
@@ -591,12 +596,14 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
     plant::DriveRigParams p = read_rig(vr, ctx);
     vr.finish();
     plant::validate(p, problems);
+    if (problems.empty()) plant::warn(p.drive, "drive", warnings);
     check_signals(plant::DriveRig(p).signals(), out.output.signals, ctx);
     out.plant = std::move(p);
   } else {
     ctx.error(ctx.where["kind"], "kind", "\"" + kind + "\"", "must be \"bev\" or \"drive_rig\"");
   }
   report_plant_problems(problems, ctx);
+  report_plant_problems(warnings, ctx, &out.warnings);
 
   if (ctx.failed_tables.count("driver.cycle") != 0 && out.solver.duration_s == 0.0) {
     // no cycle: its length is unknown, and the cycle's problem was reported already

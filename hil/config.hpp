@@ -40,6 +40,7 @@ struct Scenario {
   std::variant<plant::BevParams, plant::DriveRigParams> plant;
   SolverSettings solver;
   OutputSettings output;
+  std::vector<std::string> warnings;  // legal but surprising settings, "file:line: field = value: why"
 };
 
 // overrides: "dotted.key=value" as given to --set (value parsed as TOML, else taken as text).

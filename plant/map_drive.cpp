@@ -28,6 +28,17 @@ void validate(const MapDriveParams& p, const std::string& at, Problems& problems
   }
 }
 
+void warn(const MapDriveParams& p, const std::string& at, Problems& warnings) {
+  const double base_rad_s = p.power_max_W / p.torque_max_Nm;
+  if (p.speed_max_rad_s < base_rad_s) {
+    warnings.add(at + ".speed_max_rad_s", number_text(p.speed_max_rad_s),
+                 "below power_max_W / torque_max_Nm = " + number_text(base_rad_s) +
+                     " rad/s: the power-limited state 1 is never reached and the limit jumps from " +
+                     number_text(p.torque_max_Nm) + " to " + number_text(p.power_max_W / p.speed_max_rad_s) +
+                     " N m at speed_max (library behaviour, MODELS.md §1.3)");
+  }
+}
+
 MapDrive::MapDrive(const MapDriveParams& params) : p_(params) {
   base_speed_rad_s_ = p_.power_max_W / p_.torque_max_Nm;
   inv_torque_max_ = 1.0 / p_.torque_max_Nm;

@@ -57,8 +57,11 @@ struct MapDriveParams {
   LossFormula loss_formula;
 };
 
-// Also warns (as a problem only when impossible) about the §1.3 quirk w_max < w_base.
 void validate(const MapDriveParams& p, const std::string& at, Problems& problems);
+// Legal but surprising settings, reported as warnings: w_max < P_max / tau_max makes the
+// limit jump from tau_max up to P_max / w_max at w_max, state 0 -> 2 directly (§1.3 quirk,
+// reproduced as in the library).
+void warn(const MapDriveParams& p, const std::string& at, Problems& warnings);
 
 struct TorqueLimit {
   double torque_Nm = 0.0;  // yH of §1.3 (>= 0); the lower limit is -torque_Nm

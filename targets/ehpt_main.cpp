@@ -138,6 +138,9 @@ int cmd_run(const std::vector<std::string>& args) {
   }
   ehpt::hil::Scenario sc;
   if (const int rc = load(scenario, sets, sc); rc != 0) return rc;
+  if (!quiet) {
+    for (const auto& w : sc.warnings) std::cerr << "warning: " << w << "\n";
+  }
   if (out.empty()) out = "out/" + sc.name;
 
   std::signal(SIGINT, on_sigint);

@@ -172,6 +172,35 @@ TEST(Cli, RunTimeFaultKeepsOutputsAndExitsNonZero) {
   EXPECT_TRUE(fs::exists(out / "timeseries.csv"));
 }
 
+TEST(Cli, WarnsAboutTheLimiterQuirkOfTheTwoFlangeTest) {
+  const fs::path out = fs::temp_directory_path() / "ehpt_cli_warn";
+  const Result r = ehpt("run " + ehpt::test::source_path("scenarios/two_flange_test.toml") + " --out " + out.string());
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_HAS(r.err, "test_mb_two_flange.toml:12: drive.speed_max_rad_s = 300: below power_max_W / torque_max_Nm");
+}
+
+TEST(Cli, PlotWritesTheFigures) {
+  if (std::system("/usr/bin/python3 -c 'import matplotlib, numpy' >/dev/null 2>&1") != 0) {
+    GTEST_SKIP() << "/usr/bin/python3 with matplotlib and numpy is not installed (tools/setup.sh installs it)";
+  }
+  const fs::path out = fs::temp_directory_path() / "ehpt_cli_plot";
+  fs::remove_all(out);
+  const Result r = ehpt("run " + ehpt::test::source_path("scenarios/ev_sort1.toml") + " --quiet --plot --out " +
+                        out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* png : {"speed.png", "torque.png", "power.png", "soc.png", "locked.png"}) {
+    EXPECT_GT(fs::file_size(out / png), 10000u) << png;
+  }
+  const fs::path rig = fs::temp_directory_path() / "ehpt_cli_plot_rig";
+  ASSERT_EQ(ehpt("run " + ehpt::test::source_path("scenarios/one_flange_test.toml") + " --quiet --out " + rig.string())
+                .exit_code,
+            0);
+  ASSERT_EQ(ehpt("plot " + rig.string()).exit_code, 0);
+  EXPECT_TRUE(fs::exists(rig / "torque.png"));
+  EXPECT_TRUE(fs::exists(rig / "efficiency.png"));
+  EXPECT_EQ(ehpt("plot /nonexistent/folder").exit_code, 1);
+}
+
 TEST(Cli, HelpListAndSignals) {
   const Result help = ehpt("--help");
   EXPECT_EQ(help.exit_code, 0);
