@@ -4,15 +4,16 @@
 #include <cmath>
 
 namespace ehpt::plant {
-AxisIndex::AxisIndex(const std::vector<double>& x) {
+AxisIndex::AxisIndex(const std::vector<double>& x) : x_(x) {
   // only for axes that passed validate(): at least 2 points, sorted, non-zero span
   if (x.size() < 2 || !(x.back() > x.front())) return;
   const std::size_t n = x.size();
   last_ = n - 2;
   x0_ = x.front();
+  for (std::size_t i = 0; i + 1 < n; ++i) inv_dx_.push_back(x[i + 1] > x[i] ? 1.0 / (x[i + 1] - x[i]) : 0.0);
   const double span = x.back() - x.front();
   uniform_ = true;
-  for (std::size_t i = 0; i + 1 < n; ++i) {
+  for (std::size_t i = 0; i < n; ++i) {
     const double expected = x0_ + span * static_cast<double>(i) / static_cast<double>(n - 1);
     uniform_ = uniform_ && std::abs(x[i] - expected) <= 1e-12 * span;
   }
@@ -28,7 +29,7 @@ AxisIndex::AxisIndex(const std::vector<double>& x) {
   std::size_t i = 0;
   for (std::size_t k = 0; k < buckets; ++k) {
     // the last segment starting at or before the bucket's lower edge, with half a bucket of
-    // margin so that rounding in segment() can never skip past the right segment
+    // margin so that rounding in locate() can never skip past the right segment
     const double lower = x0_ + (static_cast<double>(k) - 0.5) / inv_width_;
     while (i + 2 < n && x[i + 1] <= lower) ++i;
     bucket_[k] = static_cast<std::uint32_t>(i);
@@ -36,12 +37,7 @@ AxisIndex::AxisIndex(const std::vector<double>& x) {
 }
 
 Table1d::Table1d(std::vector<double> x, std::vector<double> y, Extrapolation extrapolation)
-    : x_(std::move(x)), y_(std::move(y)), extrapolation_(extrapolation), index_(x_) {
-  for (std::size_t i = 0; i + 1 < x_.size(); ++i) {
-    const double dx = x_[i + 1] - x_[i];
-    slope_.push_back(dx > 0.0 ? (y_[i + 1] - y_[i]) / dx : 0.0);
-  }
-}
+    : x_(std::move(x)), y_(std::move(y)), extrapolation_(extrapolation), index_(x_) {}
 
 void validate(const Table1d& t, const std::string& field, bool allow_repeats, Problems& problems) {
   const auto& x = t.x();
@@ -70,10 +66,7 @@ void validate(const Table1d& t, const std::string& field, bool allow_repeats, Pr
 }
 
 Table2d::Table2d(std::vector<double> u1, std::vector<double> u2, std::vector<double> values)
-    : u1_(std::move(u1)), u2_(std::move(u2)), v_(std::move(values)), index1_(u1_), index2_(u2_) {
-  for (std::size_t i = 0; i + 1 < u1_.size(); ++i) inv_du1_.push_back(1.0 / (u1_[i + 1] - u1_[i]));
-  for (std::size_t j = 0; j + 1 < u2_.size(); ++j) inv_du2_.push_back(1.0 / (u2_[j + 1] - u2_[j]));
-}
+    : u1_(std::move(u1)), u2_(std::move(u2)), v_(std::move(values)), n2_(u2_.size()), index1_(u1_), index2_(u2_) {}
 
 void validate(const Table2d& t, const std::string& field, Problems& problems) {
   const auto check_axis = [&](const std::vector<double>& ax, const char* name) {

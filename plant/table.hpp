@@ -8,7 +8,8 @@
 //   Table2d: bilinear on a rectangular grid, u1 = row axis, u2 = column axis; outside
 //            the grid, linear from the last two grid lines (P15..V2 behaviour, §1.4).
 //
-// Tables are built and validated at start-up; lookups allocate nothing.
+// Tables are built and validated at start-up; lookups allocate nothing and never search:
+// they run inside every derivative evaluation.
 
 #include <cstdint>
 #include <string>
@@ -18,31 +19,46 @@
 
 namespace ehpt::plant {
 
-// Finds the segment of a sorted axis in O(1), without a binary search in the step loop.
-// An evenly spaced axis (maps, 1 Hz cycles) gives the index by one multiplication; any
-// other axis gets a bucket grid built at start-up that maps u to the first candidate
-// segment, and a short forward scan finishes (repeated values allowed).
+// Where u falls on a sorted axis, in O(1). An evenly spaced axis (maps, 1 Hz cycles) gives
+// segment and fraction by one multiplication; any other axis gets a bucket grid built at
+// start-up that maps u to the first candidate segment, and a short forward scan finishes
+// (repeated values allowed: the scan moves past them).
 class AxisIndex {
  public:
+  struct Position {
+    std::size_t i;  // segment [x[i], x[i+1]], kept within [0, n-2]
+    double t;       // (u - x[i]) / (x[i+1] - x[i]); < 0 or > 1 outside the axis (extrapolation)
+  };
+
   AxisIndex() = default;
   explicit AxisIndex(const std::vector<double>& x);
-  // Run phase: the last i with x[i] <= u, kept within [0, n-2].
-  std::size_t segment(const double* x, double u) const {
+
+  // Run phase.
+  Position locate(double u) const {
     const double k = (u - x0_) * inv_width_;
-    if (!(k > 0.0)) return 0;  // below the axis (or NaN)
-    if (k >= buckets_) return last_;
-    std::size_t i = static_cast<std::size_t>(k);
-    if (uniform_) return i < last_ ? i : last_;
-    i = bucket_[i];
-    while (i < last_ && x[i + 1] <= u) ++i;
-    return i;
+    if (uniform_) {
+      std::size_t i = k > 0.0 ? static_cast<std::size_t>(k) : 0;  // NaN -> 0
+      if (i > last_) i = last_;
+      return {i, k - static_cast<double>(i)};
+    }
+    std::size_t i = 0;
+    if (k >= buckets_) {
+      i = last_;
+    } else if (k > 0.0) {
+      i = bucket_[static_cast<std::size_t>(k)];
+      while (i < last_ && x_[i + 1] <= u) ++i;
+    }
+    return {i, (u - x_[i]) * inv_dx_[i]};
   }
 
  private:
-  double x0_ = 0.0, inv_width_ = 0.0, buckets_ = 0.0;
+  std::vector<double> x_;
+  std::vector<double> inv_dx_;         // 1 / (x[i+1] - x[i]); 0 for a zero-length segment
+  double x0_ = 0.0, inv_width_ = 0.0;  // index = (u - x0) * inv_width
+  double buckets_ = 0.0;
   std::size_t last_ = 0;               // n - 2
-  bool uniform_ = false;               // evenly spaced: bucket k is segment k
-  std::vector<std::uint32_t> bucket_;  // otherwise: first segment that can hold a u of bucket k
+  bool uniform_ = false;
+  std::vector<std::uint32_t> bucket_;  // non-uniform: first segment that can hold a u of bucket k
 };
 
 enum class Extrapolation { kLinear, kHold };
@@ -58,8 +74,8 @@ class Table1d {
       if (u <= x_.front()) return y_.front();
       if (u >= x_.back()) return y_.back();
     }
-    const std::size_t i = index_.segment(x_.data(), u);
-    return y_[i] + slope_[i] * (u - x_[i]);
+    const AxisIndex::Position p = index_.locate(u);
+    return y_[p.i] + p.t * (y_[p.i + 1] - y_[p.i]);
   }
 
   bool empty() const { return x_.empty(); }
@@ -71,9 +87,6 @@ class Table1d {
   std::vector<double> x_, y_;
   Extrapolation extrapolation_ = Extrapolation::kLinear;
   AxisIndex index_;
-  // (y[i+1] - y[i]) / (x[i+1] - x[i]); on a zero-length segment (a step) 0, and the segment
-  // is never chosen for u inside the axis because the scan moves past repeated values
-  std::vector<double> slope_;
 };
 
 // At least two rows, finite values, x non-decreasing (repeats allowed when
@@ -86,19 +99,16 @@ class Table2d {
   // values are row-major: values[i * u2.size() + j] belongs to (u1[i], u2[j]).
   Table2d(std::vector<double> u1, std::vector<double> u2, std::vector<double> values);
 
-  // Run phase: no allocation.
+  // Run phase: no allocation. Unclamped fractions give linear extrapolation from the last
+  // two grid lines.
   double operator()(double a, double b) const {
-    const std::size_t n2 = u2_.size();
-    const std::size_t i = index1_.segment(u1_.data(), a);
-    const std::size_t j = index2_.segment(u2_.data(), b);
-    // unclamped fractions give linear extrapolation from the last two grid lines
-    const double ta = (a - u1_[i]) * inv_du1_[i];
-    const double tb = (b - u2_[j]) * inv_du2_[j];
-    const double* r0 = v_.data() + i * n2 + j;
-    const double* r1 = r0 + n2;
-    const double lo = r0[0] + tb * (r0[1] - r0[0]);
-    const double hi = r1[0] + tb * (r1[1] - r1[0]);
-    return lo + ta * (hi - lo);
+    const AxisIndex::Position pa = index1_.locate(a);
+    const AxisIndex::Position pb = index2_.locate(b);
+    const double* r0 = v_.data() + pa.i * n2_ + pb.i;
+    const double* r1 = r0 + n2_;
+    const double lo = r0[0] + pb.t * (r0[1] - r0[0]);
+    const double hi = r1[0] + pb.t * (r1[1] - r1[0]);
+    return lo + pa.t * (hi - lo);
   }
 
   bool empty() const { return u1_.empty(); }
@@ -108,8 +118,8 @@ class Table2d {
 
  private:
   std::vector<double> u1_, u2_, v_;
+  std::size_t n2_ = 0;
   AxisIndex index1_, index2_;
-  std::vector<double> inv_du1_, inv_du2_;  // 1 / grid spacing, so a lookup has no division
 };
 
 // At least 2 x 2, strictly increasing axes, finite values, values.size() = n1 * n2.
