@@ -73,7 +73,7 @@ DriveSummary drive_cycle(const BevParams& params, double h_s, double duration_s)
 // Stated tracking limits for the shipped MBEV (driver gain 1000 N m/(m/s), 22 kW drive):
 // a proportional driver lags by (needed force) / (k G / r), i.e. < 1 km/h wherever the drive
 // can deliver what is asked; on NEDC's extra-urban part (100 -> 120 km/h) the 22 kW drive is
-// power-limited and falls behind by up to ~7 km/h (it needs ~27 kW there).
+// power-limited and falls behind by up to ~7 km/h (it needs 23-31 kW there).
 TEST(BevOnSort1, FollowsTheCycleTravels052kmAndLocksAtEveryStop) {
   const DriveSummary s = drive_cycle(test::mbev("data/cycles/cycle_sort1.csv"), 1e-3, 150.0);
   EXPECT_NEAR(s.distance_m, 520.0, 5.2);  // 0.52 km +- 1 %
