@@ -109,20 +109,19 @@ class BatteryRc {
 
 // Run phase, inline: the plant's derivative function calls it at every stage.
 [[gnu::always_inline]] inline BatteryTerminal BatteryRc::terminal(double emf_V, double v_rc_V, double load_power_W) const {
-  BatteryTerminal b;
   const double v_int = emf_V - v_rc_V;
-  double disc = v_int * v_int - 4.0 * c_.r0_Ohm * load_power_W;
-  if (disc < 0.0) {
-    // beyond the maximum power point: hold at it and flag (the runner stops the run)
-    b.feasible = false;
-    disc = 0.0;
-  }
-  b.voltage_V = 0.5 * (v_int + std::sqrt(disc));
-  b.current_A = load_power_W / b.voltage_V;
-  b.parasitic_A = c_.k_parasitic * std::abs(b.current_A);
-  b.main_A = b.current_A + b.parasitic_A;
-  b.loss_W = c_.r0_Ohm * b.current_A * b.current_A + v_rc_V * v_rc_V * inv_r1_Ohm_ + v_int * b.parasitic_A;
-  return b;
+  const double disc = v_int * v_int - 4.0 * c_.r0_Ohm * load_power_W;
+  // beyond the maximum power point (disc < 0): hold at it and flag (the runner stops the run)
+  const bool feasible = disc >= 0.0;
+  const double voltage_V = 0.5 * (v_int + std::sqrt(feasible ? disc : 0.0));
+  const double current_A = load_power_W / voltage_V;
+  const double parasitic_A = c_.k_parasitic * std::abs(current_A);
+  return {.voltage_V = voltage_V,
+          .current_A = current_A,
+          .parasitic_A = parasitic_A,
+          .main_A = current_A + parasitic_A,
+          .loss_W = c_.r0_Ohm * current_A * current_A + v_rc_V * v_rc_V * inv_r1_Ohm_ + v_int * parasitic_A,
+          .feasible = feasible};
 }
 
 }  // namespace ehpt::plant

@@ -57,16 +57,14 @@ struct BevPlant::Eval {
   DriverOutput driver;
   DriveOperatingPoint drive;
   BatteryTerminal battery;
-  double drive_speed_rad_s = 0.0;
-  double grade_rad = 0.0;
-  double tractive_N = 0.0;     // drive torque at the wheels
-  double rolling_N = 0.0;      // Coulomb part (also the break-away force)
-  double speed_force_N = 0.0;  // aero / viscous part, odd in v
-  double grade_force_N = 0.0;
-  double brake_N = 0.0;        // magnitude
-  double applied_N = 0.0;      // what the road must hold while stuck ("sa" of §7.2)
-  double road_N = 0.0;         // reaction of the road (rolling + speed part, or sa when stuck)
-  double accel_m_s2 = 0.0;
+  double drive_speed_rad_s;
+  double grade_rad;
+  double rolling_N;      // Coulomb part (also the break-away force)
+  double speed_force_N;  // aero / viscous part, odd in v
+  double brake_N;        // magnitude
+  double applied_N;      // drive force minus grade force: what the road must hold while stuck ("sa" of §7.2)
+  double road_N;         // reaction of the road (rolling + speed part, or sa when stuck)
+  double accel_m_s2;
 };
 
 BevPlant::BevPlant(const BevParams& params)
@@ -93,39 +91,41 @@ BevPlant::Modes BevPlant::initial_modes(const State& x0) const {
 
 // Run phase: no allocation. Always inlined, so that each caller computes only what it uses.
 [[gnu::always_inline]] inline BevPlant::Eval BevPlant::evaluate(double t_s, const State& x, const Modes& m) const {
-  Eval e;
   const double v = x[kSpeed];
   // driver and drive: the driver's request is a shaft torque, the limiter may cut it
-  e.driver = drive(p_.driver, t_s, v);
-  e.drive_speed_rad_s = v * g_over_r_;
-  e.drive = drive_.operate(e.driver.request, e.drive_speed_rad_s);
-  // the battery supplies the drive's DC power
-  e.battery = battery_.terminal(x[kEmf], x[kVrc], e.drive.power_dc_W);
-  // forces at the wheel
-  e.grade_rad = road_.grade_rad(x[kDistance]);
-  e.tractive_N = e.drive.torque_Nm * g_over_r_;
-  e.rolling_N = road_.rolling_N(e.grade_rad);
-  e.speed_force_N = road_.speed_force_N(v);
-  e.grade_force_N = road_.grade_force_N(e.grade_rad);
-  const double unmet_braking_Nm = e.drive.torque_Nm - e.driver.request;
-  e.brake_N = unmet_braking_Nm > 0.0 ? brake_gain_ * unmet_braking_Nm : 0.0;
-  e.applied_N = e.tractive_N - e.grade_force_N;
-  switch (m.motion) {
-    case Motion::kStuck:
-      // the road holds the car: reaction = applied force, no acceleration
-      e.road_N = e.applied_N;
-      e.accel_m_s2 = 0.0;
-      break;
-    case Motion::kForward:
-      e.road_N = e.rolling_N + e.speed_force_N;
-      e.accel_m_s2 = (e.applied_N - e.road_N - e.brake_N) * inv_mass_eff_kg_;
-      break;
-    case Motion::kBackward:
-      e.road_N = -e.rolling_N + e.speed_force_N;
-      e.accel_m_s2 = (e.applied_N - e.road_N + e.brake_N) * inv_mass_eff_kg_;
-      break;
+  const DriverOutput driver = drive(p_.driver, t_s, v);
+  const double drive_speed_rad_s = v * g_over_r_;
+  const DriveOperatingPoint op = drive_.operate(driver.request, drive_speed_rad_s);
+  // forces at the wheel; the friction brake supplies the braking the drive could not
+  const double grade_rad = road_.grade_rad(x[kDistance]);
+  const double rolling_N = road_.rolling_N(grade_rad);
+  const double speed_force_N = road_.speed_force_N(v);
+  const double unmet_braking_Nm = op.torque_Nm - driver.request;
+  const double brake_N = unmet_braking_Nm > 0.0 ? brake_gain_ * unmet_braking_Nm : 0.0;
+  const double tractive_N = op.torque_Nm * g_over_r_;
+  const double applied_N = tractive_N - road_.grade_force_N(grade_rad);
+  // stuck: the road reacts with the applied force, no acceleration; moving: road load and
+  // brake oppose the motion
+  double road_N = applied_N, accel_m_s2 = 0.0;
+  if (m.motion == Motion::kForward) {
+    road_N = rolling_N + speed_force_N;
+    accel_m_s2 = (applied_N - road_N - brake_N) * inv_mass_eff_kg_;
+  } else if (m.motion == Motion::kBackward) {
+    road_N = -rolling_N + speed_force_N;
+    accel_m_s2 = (applied_N - road_N + brake_N) * inv_mass_eff_kg_;
   }
-  return e;
+  // the battery supplies the drive's DC power
+  return Eval{.driver = driver,
+              .drive = op,
+              .battery = battery_.terminal(x[kEmf], x[kVrc], op.power_dc_W),
+              .drive_speed_rad_s = drive_speed_rad_s,
+              .grade_rad = grade_rad,
+              .rolling_N = rolling_N,
+              .speed_force_N = speed_force_N,
+              .brake_N = brake_N,
+              .applied_N = applied_N,
+              .road_N = road_N,
+              .accel_m_s2 = accel_m_s2};
 }
 
 BevPlant::AtRest BevPlant::at_rest(double t_s, const State& x) const {

@@ -149,16 +149,18 @@ struct MotBus {
 }
 [[gnu::always_inline]] inline DriveOperatingPoint MapDrive::operate(double torque_request_Nm, double speed_rad_s) const {
   const TorqueLimit lim = torque_limit(speed_rad_s);
-  DriveOperatingPoint op;
-  op.torque_Nm = std::clamp(torque_request_Nm, -lim.torque_Nm, lim.torque_Nm);
-  op.limit_Nm = lim.torque_Nm;
-  op.limit_state = lim.state;
-  op.limiting = std::abs(op.torque_Nm - torque_request_Nm) > 1e-15;
-  op.power_mech_W = op.torque_Nm * speed_rad_s;
-  op.efficiency = efficiency(op.torque_Nm, speed_rad_s);
+  const double torque_Nm = std::clamp(torque_request_Nm, -lim.torque_Nm, lim.torque_Nm);
+  const double power_mech_W = torque_Nm * speed_rad_s;
+  const double eta = efficiency(torque_Nm, speed_rad_s);
   // motoring: losses added; generating: losses subtracted (§1.4)
-  op.power_dc_W = op.power_mech_W > 0.0 ? op.power_mech_W / op.efficiency : op.power_mech_W * op.efficiency;
-  return op;
+  const double power_dc_W = power_mech_W > 0.0 ? power_mech_W / eta : power_mech_W * eta;
+  return {.torque_Nm = torque_Nm,
+          .limit_Nm = lim.torque_Nm,
+          .limit_state = lim.state,
+          .limiting = std::abs(torque_Nm - torque_request_Nm) > 1e-15,
+          .power_mech_W = power_mech_W,
+          .power_dc_W = power_dc_W,
+          .efficiency = eta};
 }
 
 }  // namespace ehpt::plant

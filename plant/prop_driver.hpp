@@ -33,13 +33,13 @@ struct DriverOutput {
 
 // Run phase: pure function.
 inline DriverOutput drive(const PropDriverParams& p, double t_s, double speed_m_s) {
-  DriverOutput d;
-  d.speed_ref_m_s = p.cycle_m_s(t_s);
-  const double u = p.gain * (d.speed_ref_m_s - speed_m_s);
-  d.request = u > p.request_max ? p.request_max : (u < p.request_min ? p.request_min : u);
-  d.accel = d.request > 0.0 ? d.request : 0.0;
-  d.brake = d.request < 0.0 ? d.request : 0.0;
-  return d;
+  const double speed_ref_m_s = p.cycle_m_s(t_s);
+  const double u = p.gain * (speed_ref_m_s - speed_m_s);
+  const double request = u > p.request_max ? p.request_max : (u < p.request_min ? p.request_min : u);
+  return {.speed_ref_m_s = speed_ref_m_s,
+          .request = request,
+          .accel = request > 0.0 ? request : 0.0,
+          .brake = request < 0.0 ? request : 0.0};
 }
 
 }  // namespace ehpt::plant
