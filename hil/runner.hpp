@@ -67,7 +67,10 @@ class Runner {
     const std::int64_t end = std::min(total_steps_, n_ + chunk_steps_);
     const std::int64_t start = n_;
     while (n_ < end && stats_.fault == 0) {
-      if (stop != nullptr && stop->load(std::memory_order_relaxed)) break;
+      if (stop != nullptr && stop->load(std::memory_order_relaxed)) {
+        record_row_once();  // an interrupted run still ends with the state it reached
+        break;
+      }
       const solvers::StepReport r = stepper_.advance(n_, x_, m_, inputs_);
       stats_.events += r.events;
       stats_.chattering_steps += r.chattering ? 1 : 0;
@@ -115,11 +118,15 @@ class Runner {
       stats_.fault_time_s = t_s;
       stats_.fault_step = n;
     }
-    if (n % decimation_ == 0 || n == total_steps_ || fault != 0) {
-      double* row = rows_.data() + row_count_ * columns_.size();
-      for (std::size_t c = 0; c < members_.size(); ++c) row[c] = y_.*members_[c];
-      ++row_count_;
-    }
+    if (n % decimation_ == 0 || n == total_steps_ || fault != 0) record_row_once();
+  }
+
+  void record_row_once() {
+    if (last_recorded_ == n_) return;
+    double* row = rows_.data() + row_count_ * columns_.size();
+    for (std::size_t c = 0; c < members_.size(); ++c) row[c] = y_.*members_[c];
+    ++row_count_;
+    last_recorded_ = n_;
   }
 
   const Plant& plant_;
@@ -131,6 +138,7 @@ class Runner {
   std::vector<double> rows_;
   std::size_t row_count_ = 0;
   std::int64_t n_ = 0;
+  std::int64_t last_recorded_ = -1;  // step of the last recorded row
   State x0_, x_;
   Modes m_{};
   Inputs inputs_{};
