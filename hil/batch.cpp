@@ -10,6 +10,7 @@
 #include "io/number_format.hpp"
 #include "plant/bev_plant.hpp"
 #include "plant/drive_rigs.hpp"
+#include "plant/psd_plant.hpp"
 #include "solvers/integrators.hpp"
 
 namespace ehpt::hil {
@@ -30,8 +31,9 @@ namespace {
 
 constexpr std::int64_t kChunkSteps = 50000;
 
-template <class Plant, class Integrator>
-BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions& opt, std::ostream& log) {
+template <class Plant, class Integrator, class Controller = NoController>
+BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions& opt, std::ostream& log,
+                      Controller* controller = nullptr) {
   BatchResult res;
   const auto signals = plant.signals();
   std::vector<int> columns;
@@ -60,8 +62,8 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
   }
   text += "\n";
 
-  Runner<Plant, Integrator> runner(plant, sc.solver.step_s, sc.solver.steps, sc.output.decimation, columns,
-                                   kChunkSteps);
+  Runner<Plant, Integrator, Controller> runner(plant, sc.solver.step_s, sc.solver.steps, sc.output.decimation,
+                                               columns, kChunkSteps, controller, sc.solver.ecu_ratio);
   typename Plant::Outputs y0 = runner.last_outputs();
   const auto wall_start = std::chrono::steady_clock::now();
   double run_wall_s = 0.0;
@@ -148,8 +150,18 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
     j.null("soc_start");
     j.null("soc_end");
   }
-  j.number("fuel_g", 0.0);
-  j.number("fuel_L_per_100km", 0.0);
+  double fuel_g = 0.0, fuel_L_per_100km = 0.0;
+  if constexpr (requires { y1.fuel_g; }) {
+    fuel_g = y1.fuel_g - y0.fuel_g;
+    const double litres = fuel_g / 1000.0 / plant.params().ice.fuel_density_kg_m3 * 1000.0;
+    fuel_L_per_100km = distance_m > 0.0 ? litres / (distance_m / 1e5) : NAN;
+  }
+  j.number("fuel_g", fuel_g);
+  j.number("fuel_L_per_100km", fuel_L_per_100km);
+  if (st.has_ice) {
+    j.number("ice_on_time_s", st.ice_on_time_s);
+    j.integer("ice_starts", st.ice_starts);
+  }
   const double relative = std::abs(audit.residual_J) / std::max(std::abs(audit.sources_J), 1.0);
   j.number("energy_balance_residual_J", audit.residual_J);
   j.number("energy_balance_relative", relative);
@@ -179,6 +191,11 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
                   distance_m > 0 ? audit.battery_out_J / 3600.0 / (distance_m / 1000.0) : 0.0, y0.soc, y1.soc);
     s += buf;
   }
+  if (st.has_ice) {
+    std::snprintf(buf, sizeof buf, "fuel          %.1f g, %.2f L/100 km; engine on %.1f s, %lld starts\n", fuel_g,
+                  fuel_L_per_100km, st.ice_on_time_s, static_cast<long long>(st.ice_starts));
+    s += buf;
+  }
   std::snprintf(buf, sizeof buf, "energy audit  residual %.3g J (relative %.2g)\n", audit.residual_J, relative);
   s += buf;
   std::snprintf(buf, sizeof buf, "speed         %.0f x real time (%.1f ns per step, %.3f s wall)\n",
@@ -201,10 +218,13 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
   return res;
 }
 
-template <class Plant>
-BatchResult run_with_solver(const Scenario& sc, const Plant& plant, const BatchOptions& opt, std::ostream& log) {
-  if (sc.solver.kind == SolverKind::kRk4) return run_plant<Plant, solvers::Rk4<Plant>>(sc, plant, opt, log);
-  return run_plant<Plant, solvers::ImplicitEuler<Plant>>(sc, plant, opt, log);
+template <class Plant, class Controller = NoController>
+BatchResult run_with_solver(const Scenario& sc, const Plant& plant, const BatchOptions& opt, std::ostream& log,
+                            Controller* controller = nullptr) {
+  if (sc.solver.kind == SolverKind::kRk4) {
+    return run_plant<Plant, solvers::Rk4<Plant>, Controller>(sc, plant, opt, log, controller);
+  }
+  return run_plant<Plant, solvers::ImplicitEuler<Plant>, Controller>(sc, plant, opt, log, controller);
 }
 
 }  // namespace
@@ -213,6 +233,11 @@ BatchResult run_batch(const Scenario& sc, const BatchOptions& opt, std::ostream&
   if (const auto* p = std::get_if<plant::BevParams>(&sc.plant)) {
     const plant::BevPlant plant(*p);
     return run_with_solver(sc, plant, opt, log);
+  }
+  if (const auto* p = std::get_if<plant::PsdParams>(&sc.plant)) {
+    const plant::PsdPlant plant(*p);
+    plant::PsdEcu ecu(p->ecu, p->ecu.period_s);
+    return run_with_solver(sc, plant, opt, log, &ecu);
   }
   const plant::DriveRig plant(std::get<plant::DriveRigParams>(sc.plant));
   return run_with_solver(sc, plant, opt, log);

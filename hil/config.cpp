@@ -400,32 +400,118 @@ plant::RoadLoadParams read_road(Reader r, Context& ctx) {
   return p;
 }
 
-plant::BevParams read_bev(Reader& root, const std::string& cycle_path, Context& ctx) {
-  plant::BevParams p;
+plant::VehicleBodyParams read_body(Reader r) {
+  plant::VehicleBodyParams b;
+  b.mass_kg = r.required_number("mass_kg");
+  b.wheel_radius_m = r.required_number("wheel_radius_m");
+  b.gear_ratio = r.required_number("gear_ratio");
+  b.speed_initial_m_s = r.number("speed_initial_m_s", 0.0);
+  r.finish();
+  return b;
+}
+
+plant::PropDriverParams read_driver(Reader r) {
+  plant::PropDriverParams d;
+  d.gain = r.required_number("gain");
+  d.request_max = r.number("request_max", d.request_max);
+  d.request_min = r.number("request_min", -d.request_max);
+  r.finish();
+  return d;
+}
+
+plant::BrakeParams read_brake(Reader r) {
+  plant::BrakeParams b;
+  b.enabled = r.flag("enabled", b.enabled);
+  b.library_gain = r.flag("library_gain", b.library_gain);
+  r.finish();
+  return b;
+}
+
+plant::MapIceParams read_ice(Reader r, bool& on_off, Context& ctx) {
+  plant::MapIceParams p;
+  p.inertia_kgm2 = r.number("inertia_kgm2", p.inertia_kgm2);
+  p.speed_initial_rad_s = r.number("speed_initial_rad_s", p.speed_initial_rad_s);
+  p.control_gain_Nm_W = r.number("control_gain_Nm_W", p.control_gain_Nm_W);
+  p.fuel_lhv_J_kg = r.number("fuel_lhv_J_kg", p.fuel_lhv_J_kg);
+  p.fuel_density_kg_m3 = r.number("fuel_density_kg_m3", p.fuel_density_kg_m3);
+  on_off = r.flag("on_off", false);
+  const std::string curve = r.path("torque_max_table", true);
+  if (!curve.empty()) p.torque_max_Nm = load_curve(curve, r.field("torque_max"), ctx);
+  const std::string sfc = r.path("sfc_map", true);
+  if (!sfc.empty()) p.sfc_g_kWh = load_map(sfc, r.field("sfc_map"), ctx);
+  r.finish();
+  return p;
+}
+
+plant::PsdEcuParams read_ecu(Reader r, Context& ctx) {
+  plant::PsdEcuParams p;
+  const std::string kind = r.text("kind", "");
+  if (kind == "MBecu1") {
+    p.kind = plant::PsdEcuKind::kMBecu1;
+  } else if (kind == "MBecu1soc") {
+    p.kind = plant::PsdEcuKind::kMBecu1soc;
+  } else if (kind == "MBecu2") {
+    p.kind = plant::PsdEcuKind::kMBecu2;
+  } else {
+    ctx.error(ctx.where[r.field("kind")], r.field("kind"), "\"" + kind + "\"",
+              "must be \"MBecu1\", \"MBecu1soc\" or \"MBecu2\"");
+  }
+  p.period_s = r.number("period_s", p.period_s);
+  p.max_torque_request_Nm = r.number("max_torque_request_Nm", p.max_torque_request_Nm);
+  p.power_filter_s = r.number("power_filter_s", p.power_filter_s);
+  p.gen_loop_gain_Nm_s_rad = r.required_number("gen_loop_gain_Nm_s_rad");
+  p.gen_filter_s = r.number("gen_filter_s", p.gen_filter_s);
+  p.gen_torque_max_Nm = r.number("gen_torque_max_Nm", p.gen_torque_max_Nm);
+  p.ice_speed_min_rad_s = r.number("ice_speed_min_rad_s", p.ice_speed_min_rad_s);
+  const std::string table = r.path("power_to_speed_table", true);
+  if (!table.empty()) {
+    p.power_to_speed_rad_s = load_curve(table, r.field("power_to_speed"), ctx);
+    // PowToW extrapolates linearly beyond its ends (§5.1)
+    p.power_to_speed_rad_s = plant::Table1d(p.power_to_speed_rad_s.x(), p.power_to_speed_rad_s.y(),
+                                            plant::Extrapolation::kLinear);
+  }
+  p.soc_ref = r.number("soc_ref", p.soc_ref);
+  if (p.kind == plant::PsdEcuKind::kMBecu1) {
+    if (r.has("soc_loop_gain_W")) r.number("soc_loop_gain_W", 0.0);  // allowed, unused
+    p.soc_loop_gain_W = 0.0;
+  } else {
+    p.soc_loop_gain_W = r.required_number("soc_loop_gain_W");
+  }
+  p.on_threshold_W = r.number("on_threshold_W", p.on_threshold_W);
+  p.off_threshold_W = r.number("off_threshold_W", p.off_threshold_W);
+  p.ice_off_speed_ref_rad_s = r.number("ice_off_speed_ref_rad_s", p.ice_off_speed_ref_rad_s);
+  r.finish();
+  return p;
+}
+
+plant::PsdParams read_psd(Reader& root, const std::string& cycle_path, Context& ctx) {
+  plant::PsdParams p;
+  p.body = read_body(root.sub("vehicle"));
+  p.road = read_road(root.sub("road"), ctx);
+  p.brake = read_brake(root.sub("brake"));
+  p.driver = read_driver(root.sub("driver"));
+  p.battery = read_battery(root.sub("battery"));
+  p.ice = read_ice(root.sub("ice"), p.ice_on_off, ctx);
+  p.gen = read_drive(root.sub("gen"), ctx);
+  p.mot = read_drive(root.sub("mot"), ctx);
   {
-    Reader r = root.sub("vehicle");
-    p.body.mass_kg = r.required_number("mass_kg");
-    p.body.wheel_radius_m = r.required_number("wheel_radius_m");
-    p.body.gear_ratio = r.required_number("gear_ratio");
-    p.body.speed_initial_m_s = r.number("speed_initial_m_s", 0.0);
+    Reader r = root.sub("planetary");
+    p.ring_sun_ratio = r.number("ring_sun_ratio", p.ring_sun_ratio);
     r.finish();
   }
+  p.ecu = read_ecu(root.sub("ecu"), ctx);
+  if (!cycle_path.empty()) p.driver.cycle_m_s = load_cycle(cycle_path, "driver.cycle", ctx);
+  return p;
+}
+
+plant::BevParams read_bev(Reader& root, const std::string& cycle_path, Context& ctx) {
+  plant::BevParams p;
+  p.body = read_body(root.sub("vehicle"));
   p.road = read_road(root.sub("road"), ctx);
   p.drive = read_drive(root.sub("drive"), ctx);
   p.battery = read_battery(root.sub("battery"));
-  {
-    Reader r = root.sub("driver");
-    p.driver.gain = r.required_number("gain");
-    p.driver.request_max = r.number("request_max", p.driver.request_max);
-    p.driver.request_min = r.number("request_min", -p.driver.request_max);
-    r.finish();
-  }
-  {
-    Reader r = root.sub("brake");
-    p.brake.enabled = r.flag("enabled", p.brake.enabled);
-    p.brake.library_gain = r.flag("library_gain", p.brake.library_gain);
-    r.finish();
-  }
+  p.driver = read_driver(root.sub("driver"));
+  p.brake = read_brake(root.sub("brake"));
   if (!cycle_path.empty()) p.driver.cycle_m_s = load_cycle(cycle_path, "driver.cycle", ctx);
   return p;
 }
@@ -591,6 +677,29 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
     if (problems.empty()) plant::warn(p.drive, "drive", warnings);
     check_signals(plant::BevPlant::kSignals, out.output.signals, ctx);
     out.plant = std::move(p);
+  } else if (kind == "psd") {
+    if (out.cycle_path.empty()) ctx.error(path, "cycle", "", "missing (a vehicle with a driver needs a cycle file)");
+    plant::PsdParams p = read_psd(vr, out.cycle_path, ctx);
+    vr.finish();
+    if (!p.driver.cycle_m_s.empty()) {
+      if (out.solver.duration_s == 0.0) out.solver.duration_s = p.driver.cycle_m_s.x().back();
+    }
+    plant::validate(p, problems);
+    if (problems.empty()) {
+      plant::warn(p.gen, "gen", warnings);
+      plant::warn(p.mot, "mot", warnings);
+    }
+    // the ECU runs every whole number of plant steps
+    const double period_s = p.ecu.period_s > 0.0 ? p.ecu.period_s : out.solver.step_s;
+    const double ratio = period_s / out.solver.step_s;
+    out.solver.ecu_ratio = std::llround(ratio);
+    if (out.solver.ecu_ratio < 1 || std::abs(ratio - static_cast<double>(out.solver.ecu_ratio)) > 1e-9 * ratio) {
+      ctx.error(ctx.where["ecu.period_s"], "ecu.period_s", io::number_text(p.ecu.period_s),
+                "must be a whole multiple of solver.step_s = " + io::number_text(out.solver.step_s));
+    }
+    p.ecu.period_s = period_s;
+    check_signals(plant::PsdPlant::kSignals, out.output.signals, ctx);
+    out.plant = std::move(p);
   } else if (kind == "drive_rig") {
     if (!out.cycle_path.empty()) ctx.error(ctx.where["cycle"], "cycle", out.cycle_path, "a drive rig has no driver: remove the cycle");
     plant::DriveRigParams p = read_rig(vr, ctx);
@@ -600,7 +709,7 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
     check_signals(plant::DriveRig(p).signals(), out.output.signals, ctx);
     out.plant = std::move(p);
   } else {
-    ctx.error(ctx.where["kind"], "kind", "\"" + kind + "\"", "must be \"bev\" or \"drive_rig\"");
+    ctx.error(ctx.where["kind"], "kind", "\"" + kind + "\"", "must be \"bev\", \"psd\" or \"drive_rig\"");
   }
   report_plant_problems(problems, ctx);
   report_plant_problems(warnings, ctx, &out.warnings);

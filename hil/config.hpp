@@ -13,6 +13,7 @@
 
 #include "plant/bev_plant.hpp"
 #include "plant/drive_rigs.hpp"
+#include "plant/psd_plant.hpp"
 
 namespace ehpt::hil {
 
@@ -24,6 +25,7 @@ struct SolverSettings {
   double step_s = 1e-3;
   double duration_s = 0.0;
   std::int64_t steps = 0;  // round(duration_s / step_s)
+  std::int64_t ecu_ratio = 1;  // ECU period / step (vehicles with a built-in ECU)
 };
 
 struct OutputSettings {
@@ -37,7 +39,7 @@ struct Scenario {
   std::string description;
   std::string vehicle_path;
   std::string cycle_path;   // empty for rigs
-  std::variant<plant::BevParams, plant::DriveRigParams> plant;
+  std::variant<plant::BevParams, plant::DriveRigParams, plant::PsdParams> plant;
   SolverSettings solver;
   OutputSettings output;
   std::vector<std::string> warnings;  // legal but surprising settings, "file:line: field = value: why"

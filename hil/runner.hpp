@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdint>
 #include <span>
+#include <type_traits>
 #include <vector>
 
 #include "plant/signals.hpp"
@@ -33,9 +34,22 @@ struct RunStats {
   double speed_error_sq_sum = 0.0;
   double speed_error_max_kmh = 0.0;
   double locked_time_s = 0.0;
+  // engines: time on and number of starts (off -> on)
+  bool has_ice = false;
+  double ice_on_time_s = 0.0;
+  std::int64_t ice_starts = 0;
 };
 
-template <class Plant, class Integrator>
+// A runner without a controller: the plant's inputs stay as constructed.
+struct NoController {
+  template <class Bus>
+  void update(Bus&) {}
+};
+
+// Controller: a discrete-time ECU with update(Inputs& bus), run every `controller_ratio`
+// steps. Before each update the plant writes the sensor half of the bus (plant.sense), so
+// the ECU and the plant exchange only that one struct, as a bus will carry it.
+template <class Plant, class Integrator, class Controller = NoController>
 class Runner {
  public:
   using State = typename Plant::State;
@@ -46,8 +60,11 @@ class Runner {
   // columns: indices into plant.signals() to record. chunk_steps: most steps one run() call
   // may take; the row buffer is sized for it here.
   Runner(const Plant& plant, double h_s, std::int64_t total_steps, std::int64_t decimation,
-         std::vector<int> columns, std::int64_t chunk_steps)
+         std::vector<int> columns, std::int64_t chunk_steps, Controller* controller = nullptr,
+         std::int64_t controller_ratio = 1)
       : plant_(plant),
+        controller_(controller),
+        controller_ratio_(controller_ratio),
         integrator_(plant),
         stepper_(plant, integrator_, 0.0, h_s),
         total_steps_(total_steps),
@@ -59,6 +76,7 @@ class Runner {
     x0_ = plant.initial_state();
     x_ = x0_;
     m_ = plant.initial_modes(x_);
+    tick_controller(0);
     observe(0);
   }
 
@@ -77,6 +95,7 @@ class Runner {
       stats_.newton_failures += r.converged ? 0 : 1;
       stats_.newton_iterations += r.iterations;
       ++n_;
+      tick_controller(n_);
       observe(n_);
     }
     stats_.steps_done = n_;
@@ -98,6 +117,16 @@ class Runner {
   void clear_rows() { row_count_ = 0; }
 
  private:
+  // Run phase: the ECU samples the plant at t_n and sets the inputs for the next period.
+  void tick_controller(std::int64_t n) {
+    if constexpr (!std::is_same_v<Controller, NoController>) {
+      if (controller_ != nullptr && n % controller_ratio_ == 0) {
+        plant_.sense(stepper_.time_s(n), x_, m_, inputs_);
+        controller_->update(inputs_);
+      }
+    }
+  }
+
   // Run phase: outputs at grid point n, metrics, and the decimated record.
   void observe(std::int64_t n) {
     const double t_s = stepper_.time_s(n);
@@ -111,6 +140,14 @@ class Runner {
     }
     if constexpr (requires { y_.locked; }) {
       if (n > 0 && y_.locked != 0.0) stats_.locked_time_s += stepper_.step_s();
+    }
+    if constexpr (requires { y_.iceON; }) {
+      const bool on = y_.iceON != 0.0;
+      stats_.has_ice = true;
+      if (n > 0 && ice_was_on_) stats_.ice_on_time_s += stepper_.step_s();  // on during the step before
+      if (on && !ice_was_on_ && n > 0) ++stats_.ice_starts;
+      if (n == 0 && on) stats_.ice_starts = 1;  // running from the start counts as one start
+      ice_was_on_ = on;
     }
     const auto fault = static_cast<unsigned>(y_.fault);
     if (fault != 0 && stats_.fault == 0) {
@@ -130,6 +167,9 @@ class Runner {
   }
 
   const Plant& plant_;
+  Controller* controller_;
+  std::int64_t controller_ratio_;
+  bool ice_was_on_ = false;
   Integrator integrator_;
   solvers::EventStepper<Plant, Integrator> stepper_;
   std::int64_t total_steps_, decimation_, chunk_steps_;

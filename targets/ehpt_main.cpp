@@ -196,6 +196,8 @@ int cmd_signals(const std::vector<std::string>& args) {
   if (const int rc = load(args[0], {}, sc); rc != 0) return rc;
   if (const auto* p = std::get_if<ehpt::plant::BevParams>(&sc.plant)) {
     print_signals(ehpt::plant::BevPlant(*p).signals());
+  } else if (const auto* q = std::get_if<ehpt::plant::PsdParams>(&sc.plant)) {
+    print_signals(ehpt::plant::PsdPlant(*q).signals());
   } else {
     print_signals(ehpt::plant::DriveRig(std::get<ehpt::plant::DriveRigParams>(sc.plant)).signals());
   }

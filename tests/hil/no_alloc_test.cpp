@@ -7,6 +7,7 @@
 #include "hil/runner.hpp"
 #include "plant/bev_plant.hpp"
 #include "plant/drive_rigs.hpp"
+#include "plant/psd_plant.hpp"
 #include "solvers/integrators.hpp"
 #include "test_plants.hpp"
 
@@ -28,6 +29,19 @@ TEST(NoAllocation, BevWithBothSolvers) {
   const plant::BevPlant plant(test::mbev("data/cycles/cycle_nedc.csv"));
   EXPECT_EQ((allocations_over_run<plant::BevPlant, solvers::Rk4<plant::BevPlant>>(plant, 100000)), 0u);
   EXPECT_EQ((allocations_over_run<plant::BevPlant, solvers::ImplicitEuler<plant::BevPlant>>(plant, 100000)), 0u);
+}
+
+TEST(NoAllocation, PowerSplitHybridWithItsEcu) {
+  const hil::Scenario sc = test::load(test::source_path("scenarios/psecu2_nedc.toml"));
+  const auto& p = std::get<plant::PsdParams>(sc.plant);
+  const plant::PsdPlant plant(p);
+  plant::PsdEcu ecu(p.ecu, 1e-3);
+  using R = Runner<plant::PsdPlant, solvers::Rk4<plant::PsdPlant>, plant::PsdEcu>;
+  R runner(plant, 1e-3, 100000, 100, {0, 1, 2}, 100000, &ecu, 1);  // start-up: may allocate
+  const std::size_t before = test::allocation_count();
+  runner.run();  // run phase, with the engine switching on and off
+  EXPECT_EQ(test::allocation_count() - before, 0u);
+  EXPECT_EQ(runner.step_index(), 100000);
 }
 
 TEST(NoAllocation, DriveRig) {

@@ -6,6 +6,15 @@
 
 namespace ehpt::test {
 
+hil::Scenario load(const std::string& path, const std::vector<std::string>& overrides) {
+  hil::Scenario sc;
+  std::vector<std::string> errors;
+  if (!hil::load_scenario(path, overrides, sc, errors)) {
+    throw std::runtime_error(path + ": " + (errors.empty() ? "load failed" : errors.front()));
+  }
+  return sc;
+}
+
 plant::BevParams mbev(const std::string& cycle_file) {
   hil::Scenario sc;
   std::vector<std::string> errors;

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <regex>
 #include <sstream>
 
@@ -43,6 +44,12 @@ Result ehpt(const std::string& args) {
   return r;
 }
 
+void replace_once(std::string& s, const std::string& from, const std::string& to) {
+  const auto at = s.find(from);
+  ASSERT_NE(at, std::string::npos) << from;
+  s.replace(at, from.size(), to);
+}
+
 // A scratch copy of the MBEV vehicle and a scenario using it, with one line replaced.
 class BadInput : public ::testing::Test {
  protected:
@@ -56,11 +63,7 @@ class BadInput : public ::testing::Test {
     cycle_ = slurp(ehpt::test::source_path("data/cycles/cycle_sort1.csv"));
     map_ = slurp(map);
   }
-  static void replace(std::string& s, const std::string& from, const std::string& to) {
-    const auto at = s.find(from);
-    ASSERT_NE(at, std::string::npos) << from;
-    s.replace(at, from.size(), to);
-  }
+  static void replace(std::string& s, const std::string& from, const std::string& to) { replace_once(s, from, to); }
   // Writes the files and runs `ehpt run`; the output folder must not appear.
   Result run() {
     std::ofstream(dir_ / "vehicle.toml") << vehicle_;
@@ -141,10 +144,75 @@ TEST_F(BadInput, EveryProblemIsListedAtOnce) {
   EXPECT_HAS(r.err, "3 problems; nothing was run.");
 }
 
+// The paper's PSecu2 vehicle with its maps copied next to it, one line replaced.
+class BadPsdInput : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("ehpt_badpsd_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    vehicle_ = slurp(ehpt::test::source_path("vehicles/psecu2.toml"));
+    for (const char* map : {"map_psd_ice_max_torque.csv", "map_psd_ice_sfc.csv", "ecu_psd_power_to_ice_speed.csv"}) {
+      files_[map] = slurp(ehpt::test::source_path(std::string("data/maps/") + map));
+      replace_once(vehicle_, std::string("../data/maps/") + map, map);
+    }
+  }
+  Result run() {
+    std::ofstream(dir_ / "vehicle.toml") << vehicle_;
+    for (const auto& [name, text] : files_) std::ofstream(dir_ / name) << text;
+    std::ofstream(dir_ / "scenario.toml") << "vehicle_file = \"vehicle.toml\"\ncycle = \"" +
+                                                 ehpt::test::source_path("data/cycles/cycle_nedc.csv") + "\"\n";
+    const std::string out = (dir_ / "out").string();
+    Result r = ehpt("run " + (dir_ / "scenario.toml").string() + " --out " + out);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(r.err.find("nothing was run"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+    return r;
+  }
+  std::string file(const std::string& name) const { return (dir_ / name).string(); }
+  fs::path dir_;
+  std::string vehicle_;
+  std::map<std::string, std::string> files_;
+};
+
+TEST_F(BadPsdInput, NegativeSfc) {
+  replace_once(files_["map_psd_ice_sfc.csv"], "50,300,265", "50,300,-265");
+  EXPECT_HAS(run().err, file("map_psd_ice_sfc.csv") + ": ice.sfc_map = -265: specific consumption must be > 0 g/kWh");
+}
+
+TEST_F(BadPsdInput, RingSunRatioNotAboveOne) {
+  replace_once(vehicle_, "ring_sun_ratio = 2.6", "ring_sun_ratio = 0.8");
+  EXPECT_HAS(run().err, file("vehicle.toml") + ":38: planetary.ring_sun_ratio = 0.8: must be > 1");
+}
+
+TEST_F(BadPsdInput, HysteresisThresholdsInTheWrongOrder) {
+  replace_once(vehicle_, "off_threshold_W = 5000.0", "off_threshold_W = 9000.0");
+  EXPECT_HAS(run().err, file("vehicle.toml") + ":76: ecu.off_threshold_W = 9000: must be < on_threshold_W = 7000");
+}
+
+TEST_F(BadPsdInput, TorqueCurveWithNonMonotonicSpeedAxis) {
+  replace_once(files_["map_psd_ice_max_torque.csv"], "300,92", "150,92");
+  EXPECT_HAS(run().err, file("map_psd_ice_max_torque.csv") +
+                            ":4: ice.torque_max[2] = 150: axis must be strictly increasing (previous value 200)");
+}
+
+TEST_F(BadPsdInput, UnknownEcuKind) {
+  replace_once(vehicle_, "kind = \"MBecu2\"", "kind = \"MBecu3\"");
+  EXPECT_HAS(run().err, "ecu.kind = \"MBecu3\": must be \"MBecu1\", \"MBecu1soc\" or \"MBecu2\"");
+}
+
 TEST(Cli, TwoRunsGiveBitIdenticalTimeseries) {
   const fs::path tmp = fs::temp_directory_path() / "ehpt_cli_repeat";
   fs::remove_all(tmp);
   const std::string scenario = ehpt::test::source_path("scenarios/ev_sort1.toml");
+  const std::string hybrid = ehpt::test::source_path("scenarios/psecu2_nedc.toml") + " --set solver.duration_s=400";
+  ASSERT_EQ(ehpt("run " + hybrid + " --quiet --out " + (tmp / "h1").string()).exit_code, 0);
+  ASSERT_EQ(ehpt("run " + hybrid + " --quiet --out " + (tmp / "h2").string()).exit_code, 0);
+  EXPECT_EQ(slurp((tmp / "h1/timeseries.csv").string()), slurp((tmp / "h2/timeseries.csv").string()));
+  const std::string hybrid_summary = slurp((tmp / "h1/summary.json").string());
+  for (const char* key : {"fuel_g", "fuel_L_per_100km", "ice_on_time_s", "ice_starts", "fuel_chemical_J", "events"}) {
+    EXPECT_HAS(hybrid_summary, std::string("\"") + key + "\": ");
+  }
   ASSERT_EQ(ehpt("run " + scenario + " --quiet --out " + (tmp / "a").string()).exit_code, 0);
   ASSERT_EQ(ehpt("run " + scenario + " --quiet --out " + (tmp / "b").string()).exit_code, 0);
   const std::string a = slurp((tmp / "a/timeseries.csv").string());

@@ -1,0 +1,147 @@
+#pragma once
+// Power-split hybrid (PSecu1/2/3 of the library, the paper's "PSecu2" example), MODELS.md
+// §4 and §10.4. Paper: P15 §5.2, Figs. 21-23.
+//
+// Wiring (§4.2): ICE -- carrier; gen (one-flange drive) -- sun; ring -- mot (two-flange
+// drive) flange A; mot flange B -- final gear G -- wheels (r) -- vehicle mass m -- DragForce.
+// gen and mot share the battery's DC bus. The ECU talks to the plant only through PsdBus.
+//
+// Planetary gear (§4.1), rho = z_ring / z_sun, massless and lossless (Willis):
+//   (1 + rho) w_c = w_s + rho w_r,    tau_r = rho tau_s,   tau_c = -(1 + rho) tau_s
+// Two degrees of freedom, generalised speeds w_c (engine) and w_r (ring = mot), v = w_r r/G
+// (§4.3, from the kinetic energy and virtual power):
+//   M = | J_i + J_g (1+rho)^2      -J_g rho (1+rho)           |
+//       | -J_g rho (1+rho)         J_m + J_g rho^2 + m (r/G)^2 |
+//   Q = | tau_ice + (1+rho) tau_g                              |
+//       | tau_m - rho tau_g - (r/G) (F_road + F_grade + F_brake) |
+//   M [dw_c/dt, dw_r/dt]' = Q       (M is constant: its inverse is computed once)
+// Vehicle stuck (DragForce locked, §7.2): w_r = 0, one degree of freedom,
+//   (J_i + J_g (1+rho)^2) dw_c/dt = tau_ice + (1+rho) tau_g, and the road must hold
+//   F_applied = (G/r)(tau_m - rho tau_g + J_g rho (1+rho) dw_c/dt) - F_grade.
+// Engine (§3.5/3.6): power loop solved exactly with dw_c/dt = a0 + a1 tau_ice; OFF (ON/OFF
+// engine and bus.iceON false) gives no torque and no fuel.
+// Friction brake: the braking mot could not deliver, F = (G/r) max(0, tau_m - motTauRef).
+//
+// State (one flat vector): 0 w_c (rad/s), 1 w_r (rad/s), 2 s (m), 3 E (V), 4 v_rc (V),
+// 5 fuel (kg), 6 altitude (m), 7..13 energy integrals (J): engine work, battery terminal
+// energy out, road-load work, gen losses, mot losses, battery losses, brake dissipation.
+// Energy audit: fuel chemical energy + battery stored-energy decrease = road work + engine
+// losses (fuel energy - engine work) + gen, mot and battery losses + brake
+// + change of kinetic energy (1/2 w' M w: vehicle and every rotating part) + m g dh.
+// Crossing 0 as for the EV (plant/bev_plant.hpp), on w_r.
+
+#include <array>
+#include <span>
+
+#include <Eigen/Core>
+
+#include "plant/battery_rc.hpp"
+#include "plant/bev_plant.hpp"
+#include "plant/map_drive.hpp"
+#include "plant/map_ice.hpp"
+#include "plant/prop_driver.hpp"
+#include "plant/psd_bus.hpp"
+#include "plant/psd_ecu.hpp"
+#include "plant/road_load.hpp"
+#include "plant/signals.hpp"
+
+namespace ehpt::plant {
+
+struct PsdParams {
+  VehicleBodyParams body;      // gear_ratio = final gear G (mot speed / wheel speed)
+  RoadLoadParams road;
+  BrakeParams brake;
+  PropDriverParams driver;     // request in per unit (k = 1 / (m/s), yMax = 1.8)
+  BatteryRcParams battery;
+  MapIceParams ice;
+  bool ice_on_off = false;     // IceConnPOO: obeys bus.iceON; else IceConnP, always on
+  MapDriveParams gen;          // one-flange drive on the sun
+  MapDriveParams mot;          // two-flange drive on the ring
+  double ring_sun_ratio = 78.0 / 30.0;
+  PsdEcuParams ecu;
+};
+
+void validate(const PsdParams& p, Problems& problems);
+
+class PsdPlant {
+ public:
+  static constexpr int kIceSpeed = 0, kRingSpeed = 1, kDistance = 2, kEmf = 3, kVrc = 4, kFuelKg = 5,
+                       kAltitude = 6;
+  static constexpr int kIceWorkJ = 7, kBatteryOutJ = 8, kRoadJ = 9, kGenLossJ = 10, kMotLossJ = 11,
+                       kBatteryLossJ = 12, kBrakeJ = 13;
+  static constexpr int kNumStates = 14;
+  static constexpr int kNumCrossings = 1;
+  using State = Eigen::Matrix<double, kNumStates, 1>;
+  struct Modes {
+    Motion motion = Motion::kStuck;
+  };
+  using Inputs = PsdBus;  // the plant reads the command half
+
+  struct Outputs {
+    double time_s = 0, speed_ref_m_s = 0, speed_m_s = 0, distance_m = 0, driverRequest = 0;
+    double iceW_rad_s = 0, ice_torque_Nm = 0, icePowDel_W = 0, icePowRef_W = 0, iceON = 0;
+    double fuel_rate_g_s = 0, fuel_g = 0, sfc_g_kWh = 0;
+    double genW_rad_s = 0, genTauRef_Nm = 0, gen_torque_Nm = 0, genTauLim_Nm = 0, genPowDel_W = 0,
+           gen_power_dc_W = 0;
+    double motW_rad_s = 0, motTauRef_Nm = 0, mot_torque_Nm = 0, motTauLim_Nm = 0, motPowDelA_W = 0,
+           motPowDelB_W = 0, mot_power_dc_W = 0;
+    double brake_force_N = 0, road_force_N = 0, grade_rad = 0;
+    double battery_voltage_V = 0, battery_current_A = 0, battery_power_W = 0, soc = 0;
+    double locked = 0, fault = 0;
+  };
+  static const std::array<Signal<Outputs>, 35> kSignals;
+  std::span<const Signal<Outputs>> signals() const { return kSignals; }
+
+  explicit PsdPlant(const PsdParams& params);  // start-up: params already validated
+
+  State initial_state() const;
+  Modes initial_modes(const State& x0) const;
+
+  // Run phase: pure functions, no allocation.
+  void derivatives(double t_s, const State& x, const Modes& m, const Inputs& u, State& dx) const;
+  void crossings(double t_s, const State& x, const Modes& m, const Inputs& u, double* z) const;
+  void on_crossing(int index, double t_s, State& x, Modes& m, const Inputs& u) const;
+  void outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const;
+  // Writes the sensor half of the bus (what the ECU reads at t_s).
+  void sense(double t_s, const State& x, const Modes& m, PsdBus& bus) const;
+
+  EnergyAudit audit(const State& x0, const State& x) const;
+  const PsdParams& params() const { return p_; }
+  // Willis: sun (gen) speed from carrier and ring speeds.
+  double sun_speed_rad_s(const State& x) const {
+    return (1.0 + rho_) * x[kIceSpeed] - rho_ * x[kRingSpeed];
+  }
+
+  struct Eval;
+  Eval evaluate(double t_s, const State& x, const Modes& m, const Inputs& u) const;
+
+ private:
+  double kinetic_energy_J(const State& x) const;
+
+  PsdParams p_;
+  MapIce ice_;
+  MapDrive gen_, mot_;
+  BatteryRc battery_;
+  RoadLoad road_;
+  double rho_ = 0.0;
+  double g_over_r_ = 0.0, r_over_g_ = 0.0;
+  double m11_ = 0, m12_ = 0, m22_ = 0;             // mass matrix (symmetric)
+  double i11_ = 0, i12_ = 0, i22_ = 0;             // its inverse
+  double brake_gain_ = 0.0;
+};
+
+// Everything one evaluation computes (public so tests can check the planetary balances).
+struct PsdPlant::Eval {
+  DriverOutput driver;
+  DriveOperatingPoint gen, mot;
+  BatteryTerminal battery;
+  double sun_speed_rad_s;
+  double ice_torque_Nm, fuel_rate_kg_s;
+  double ice_accel_rad_s2, ring_accel_rad_s2;
+  double speed_m_s;
+  double grade_rad, rolling_N, speed_force_N, grade_force_N, brake_N;
+  double applied_N;  // stuck: force the road must hold (sa); moving: unused
+  double road_N;     // reaction of the road: road load when moving, sa when stuck
+};
+
+}  // namespace ehpt::plant
