@@ -2,6 +2,8 @@
 //   BM_BevStep/<solver>:  one fixed step of the map-based EV (NEDC, h = 1 ms): stepper.advance
 //   BM_BevRun/<solver>:   a whole NEDC run through the batch runner (outputs and metrics every
 //                         step, rows every 100); counters: ns_per_step, realtime_factor
+//   BM_Psecu2Step:        the paper's PSecu2 (NEDC, h = 1 ms): ECU update + one advance()
+//   BM_Psecu2Run_nedc:    the whole 1400 s run through the runner with the ECU
 //   BM_OneFlangeStep:     one step of the TestMBOneFlange rig
 #include <benchmark/benchmark.h>
 
@@ -9,6 +11,7 @@
 #include "hil/runner.hpp"
 #include "plant/bev_plant.hpp"
 #include "plant/drive_rigs.hpp"
+#include "plant/psd_plant.hpp"
 #include "solvers/event_stepper.hpp"
 
 namespace {
@@ -67,6 +70,57 @@ BENCHMARK(BM_BevRun<solvers::Rk4<plant::BevPlant>>)->Name("BM_BevRun_nedc/rk4")-
 BENCHMARK(BM_BevRun<solvers::ImplicitEuler<plant::BevPlant>>)
     ->Name("BM_BevRun_nedc/implicit-euler")
     ->Unit(benchmark::kMillisecond);
+
+// The paper's PSecu2 on NEDC with MBecu2 every step (h = 1 ms): one step = ECU update (with
+// the plant's sensing) + one advance(); and the whole 1400 s run through the runner.
+void BM_Psecu2Step(benchmark::State& state) {
+  const hil::Scenario sc = load("psecu2_nedc.toml");
+  const auto& p = std::get<plant::PsdParams>(sc.plant);
+  const plant::PsdPlant plant(p);
+  plant::PsdEcu ecu(p.ecu, 1e-3);
+  solvers::Rk4<plant::PsdPlant> rk4(plant);
+  solvers::EventStepper<plant::PsdPlant, solvers::Rk4<plant::PsdPlant>> stepper(plant, rk4, 0.0, 1e-3);
+  plant::PsdPlant::State x = plant.initial_state();
+  plant::PsdPlant::Modes m = plant.initial_modes(x);
+  plant::PsdBus bus;
+  std::int64_t n = 0;
+  for (auto _ : state) {
+    plant.sense(stepper.time_s(n), x, m, bus);
+    ecu.update(bus);
+    stepper.advance(n, x, m, bus);
+    if (++n == 1400000) {
+      n = 0;
+      x = plant.initial_state();
+      m = plant.initial_modes(x);
+      ecu = plant::PsdEcu(p.ecu, 1e-3);
+    }
+    benchmark::DoNotOptimize(x);
+  }
+  state.counters["ns_per_step"] = benchmark::Counter(static_cast<double>(state.iterations()),
+                                                     benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["realtime_factor"] =
+      benchmark::Counter(1e-3 * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_Psecu2Step);
+
+void BM_Psecu2Run_nedc(benchmark::State& state) {
+  const hil::Scenario sc = load("psecu2_nedc.toml");
+  const auto& p = std::get<plant::PsdParams>(sc.plant);
+  const plant::PsdPlant plant(p);
+  std::int64_t steps = 0;
+  for (auto _ : state) {
+    plant::PsdEcu ecu(p.ecu, 1e-3);
+    hil::Runner<plant::PsdPlant, solvers::Rk4<plant::PsdPlant>, plant::PsdEcu> runner(
+        plant, 1e-3, sc.solver.steps, 100, {0, 1, 2}, sc.solver.steps, &ecu, 1);
+    runner.run();
+    steps += runner.step_index();
+    benchmark::DoNotOptimize(runner.state());
+  }
+  state.counters["ns_per_step"] =
+      benchmark::Counter(static_cast<double>(steps), benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["realtime_factor"] = benchmark::Counter(1e-3 * static_cast<double>(steps), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_Psecu2Run_nedc)->Unit(benchmark::kMillisecond);
 
 void BM_OneFlangeStep(benchmark::State& state) {
   const hil::Scenario sc = load("one_flange_test.toml");

@@ -186,7 +186,10 @@ void PsdPlant::on_crossing(int, double t_s, State& x, Modes& m, const Inputs& u)
 }
 
 void PsdPlant::sense(double t_s, const State& x, const Modes& m, PsdBus& bus) const {
-  const Eval e = evaluate(t_s, x, m, bus);
+  sense_from(evaluate(t_s, x, m, bus), x, m, bus);
+}
+
+void PsdPlant::sense_from(const Eval& e, const State& x, const Modes& m, PsdBus& bus) const {
   const double w_c = x[kIceSpeed], w_r = x[kRingSpeed];
   const double sun_accel = (1.0 + rho_) * e.ice_accel_rad_s2 - rho_ * e.ring_accel_rad_s2;
   bus.driverRequest = e.driver.request;
@@ -214,7 +217,7 @@ void PsdPlant::sense(double t_s, const State& x, const Modes& m, PsdBus& bus) co
 void PsdPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const {
   const Eval e = evaluate(t_s, x, m, u);
   PsdBus bus = u;
-  sense(t_s, x, m, bus);
+  sense_from(e, x, m, bus);
   y.time_s = t_s;
   y.speed_ref_m_s = e.driver.speed_ref_m_s;
   y.speed_m_s = e.speed_m_s;

@@ -117,6 +117,7 @@ class PsdPlant {
 
  private:
   double kinetic_energy_J(const State& x) const;
+  void sense_from(const Eval& e, const State& x, const Modes& m, PsdBus& bus) const;
 
   PsdParams p_;
   MapIce ice_;

@@ -22,9 +22,9 @@ import numpy as np
 
 LIMIT_STATES = ["torque", "power", "speed ramp", "over speed"]
 # Columns that only drive-rig runs write; anything else is treated as a vehicle run.
-RIG_COLUMNS = {"tauElectrical_Nm", "genTauRef_Nm", "motTauRef_Nm", "genTauLim_Nm",
-               "motTauLim_Nm", "limit_state", "genW_rad_s", "motW_rad_s",
-               "power_mech_W", "power_dc_W", "efficiency"}
+# columns only the drive rigs write (the hybrids share the bus names genTauRef_Nm etc.)
+RIG_COLUMNS = {"tauElectrical_Nm", "limit_state", "limitingTorque", "power_mech_W", "power_dc_W",
+               "efficiency", "load_torque_Nm"}
 
 
 class PlotError(Exception):
@@ -209,6 +209,48 @@ class Plotter:
                 ax2.set_ylabel("speed [km/h]")
             self.save(fig, "locked.png")
 
+    # ---------------------------------------------------------------- hybrid runs
+    def hybrid(self):
+        """Power-split hybrids (column iceW_rad_s), like the paper's Figs. 21 and 23."""
+        c, t = self.c, self.t
+        # hybrid.png: wanted vs actual speed; engine speed and ON flag; SOC
+        panels = [n for n in ("speed_m_s", "iceW_rad_s", "soc") if n in c]
+        if panels:
+            fig, axes = self.figure(len(panels), "speed, engine and state of charge")
+            for ax, n in zip(axes, panels):
+                if n == "speed_m_s":
+                    if "speed_ref_m_s" in c:
+                        ax.plot(t, c["speed_ref_m_s"] * 3.6, "--", color="tab:gray", label="wanted")
+                    ax.plot(t, c["speed_m_s"] * 3.6, color="tab:blue", label="actual")
+                    ax.set_ylabel("speed [km/h]")
+                elif n == "iceW_rad_s":
+                    ax.plot(t, c["iceW_rad_s"], color="tab:brown", label="engine speed")
+                    ax.set_ylabel("engine [rad/s]")
+                    if "iceON" in c:
+                        ax2 = ax.twinx()
+                        ax2.step(t, c["iceON"], where="post", color="tab:red", alpha=0.7, label="iceON")
+                        ax2.set_yticks([0, 1])
+                        ax2.set_ylim(-0.1, 1.6)
+                        ax2.set_ylabel("ON")
+                        ax2.legend(loc="upper left", fontsize="small")
+                else:
+                    ax.plot(t, c["soc"], color="tab:green", label="SOC")
+                    ax.set_ylabel("SOC")
+            self.save(fig, "hybrid.png")
+        # hybrid_power.png: engine power vs traction power, battery; fuel used
+        pw = [(n, lbl) for n, lbl in (("icePowDel_W", "engine (icePowDel)"), ("motPowDelB_W", "traction (motPowDelB)"),
+                                      ("battery_power_W", "battery terminal")) if n in c]
+        if pw:
+            fuel = "fuel_g" in c
+            fig, axes = self.figure(2 if fuel else 1, "powers and fuel")
+            for n, lbl in pw:
+                axes[0].plot(t, c[n] / 1000.0, label=lbl)
+            axes[0].set_ylabel("power [kW]")
+            if fuel:
+                axes[1].plot(t, c["fuel_g"], color="tab:brown", label="fuel used")
+                axes[1].set_ylabel("fuel [g]")
+            self.save(fig, "hybrid_power.png")
+
     def torque(self, req, deliv, lim, state, title):
         """torque.png: request, delivered, dashed +/- limit; limiter state subplot."""
         c, t = self.c, self.t
@@ -274,6 +316,8 @@ def main(argv):
         p.rig()
     else:
         p.vehicle()
+        if "iceW_rad_s" in cols:
+            p.hybrid()
     if p.written == 0 and not quiet:
         print(f"plot.py: note: no plottable columns in {out_dir}/timeseries.csv", file=sys.stderr)
     return 0

@@ -259,6 +259,13 @@ TEST(Cli, PlotWritesTheFigures) {
   for (const char* png : {"speed.png", "torque.png", "power.png", "soc.png", "locked.png"}) {
     EXPECT_GT(fs::file_size(out / png), 10000u) << png;
   }
+  const fs::path hybrid = fs::temp_directory_path() / "ehpt_cli_plot_hybrid";
+  ASSERT_EQ(ehpt("run " + ehpt::test::source_path("scenarios/psecu2_nedc.toml") +
+                 " --set solver.duration_s=60 --quiet --plot --out " + hybrid.string())
+                .exit_code,
+            0);
+  EXPECT_GT(fs::file_size(hybrid / "hybrid.png"), 10000u);
+  EXPECT_GT(fs::file_size(hybrid / "hybrid_power.png"), 10000u);
   const fs::path rig = fs::temp_directory_path() / "ehpt_cli_plot_rig";
   ASSERT_EQ(ehpt("run " + ehpt::test::source_path("scenarios/one_flange_test.toml") + " --quiet --out " + rig.string())
                 .exit_code,
