@@ -8,7 +8,7 @@ AxisIndex::AxisIndex(const std::vector<double>& x) : x_(x) {
   // only for axes that passed validate(): at least 2 points, sorted, non-zero span
   if (x.size() < 2 || !(x.back() > x.front())) return;
   const std::size_t n = x.size();
-  last_ = n - 2;
+  last_ = static_cast<std::int64_t>(n) - 2;
   x0_ = x.front();
   for (std::size_t i = 0; i + 1 < n; ++i) inv_dx_.push_back(x[i + 1] > x[i] ? 1.0 / (x[i + 1] - x[i]) : 0.0);
   const double span = x.back() - x.front();

@@ -34,29 +34,30 @@ class AxisIndex {
   explicit AxisIndex(const std::vector<double>& x);
 
   // Run phase.
+  // (Signed integers on purpose: double <-> int64 is one instruction, size_t is not.)
   Position locate(double u) const {
     const double k = (u - x0_) * inv_width_;
     if (uniform_) {
-      std::size_t i = k > 0.0 ? static_cast<std::size_t>(k) : 0;  // NaN -> 0
-      if (i > last_) i = last_;
-      return {i, k - static_cast<double>(i)};
+      std::int64_t i = k > 0.0 ? static_cast<std::int64_t>(k) : 0;  // NaN -> 0
+      if (k >= buckets_) i = last_;
+      return {static_cast<std::size_t>(i), k - static_cast<double>(i)};
     }
-    std::size_t i = 0;
+    std::int64_t i = 0;
     if (k >= buckets_) {
       i = last_;
     } else if (k > 0.0) {
-      i = bucket_[static_cast<std::size_t>(k)];
+      i = bucket_[static_cast<std::int64_t>(k)];
       while (i < last_ && x_[i + 1] <= u) ++i;
     }
-    return {i, (u - x_[i]) * inv_dx_[i]};
+    return {static_cast<std::size_t>(i), (u - x_[i]) * inv_dx_[i]};
   }
 
  private:
   std::vector<double> x_;
   std::vector<double> inv_dx_;         // 1 / (x[i+1] - x[i]); 0 for a zero-length segment
   double x0_ = 0.0, inv_width_ = 0.0;  // index = (u - x0) * inv_width
-  double buckets_ = 0.0;
-  std::size_t last_ = 0;               // n - 2
+  double buckets_ = 0.0;               // uniform: n - 1 (k >= it means the last segment)
+  std::int64_t last_ = 0;              // n - 2
   bool uniform_ = false;
   std::vector<std::uint32_t> bucket_;  // non-uniform: first segment that can hold a u of bucket k
 };

@@ -58,16 +58,16 @@ class EventStepper {
     StepReport r;
     const double t_end = time_s(n + 1);
     double ta = time_s(n);
-    xa_ = x;
-    for (;;) {
-      xb_ = xa_;
-      integrate(ta, t_end - ta, m, u, xb_, r);
-      if constexpr (kNumZ == 0) {
-        x = xb_;
-        return r;
-      } else {
+    if constexpr (kNumZ == 0) {
+      integrate(ta, t_end - ta, m, u, x, r);
+      return r;
+    } else {
+      for (;;) {
+        // integrate the rest of the step in place, keeping its start for event location
+        xa_ = x;
+        integrate(ta, t_end - ta, m, u, x, r);
         plant_.crossings(ta, xa_, m, u, za_.data());
-        plant_.crossings(t_end, xb_, m, u, zb_.data());
+        plant_.crossings(t_end, x, m, u, zb_.data());
         int fired = -1;
         double tau_s = t_end - ta;
         for (int i = 0; i < kNumZ; ++i) {
@@ -84,25 +84,19 @@ class EventStepper {
             }
           }
         }
-        if (fired < 0) {
-          x = xb_;
-          return r;
-        }
+        if (fired < 0) return r;
         if (r.events >= kMaxEventsPerStep) {
-          r.chattering = true;
-          x = xb_;
+          r.chattering = true;  // finish the step in the last mode
           return r;
         }
         // integrate to the event, switch the mode, and carry on with the rest of the step
-        if (tau_s > 0.0) integrate(ta, tau_s, m, u, xa_, r);
+        x = xa_;
+        if (tau_s > 0.0) integrate(ta, tau_s, m, u, x, r);
         ta += tau_s;
-        plant_.on_crossing(fired, ta, xa_, m, u);
+        plant_.on_crossing(fired, ta, x, m, u);
         ++r.events;
         r.event_time_s = ta;
-        if (!(ta < t_end)) {
-          x = xa_;
-          return r;
-        }
+        if (!(ta < t_end)) return r;
       }
     }
   }
@@ -144,7 +138,7 @@ class EventStepper {
   const Plant& plant_;
   Integrator& integ_;
   double t0_s_, h_s_, tol_s_;
-  State xa_, xb_, xm_;
+  State xa_, xm_;  // segment start; trial point while locating
   std::array<double, (kNumZ > 0 ? kNumZ : 1)> za_{}, zb_{}, zm_{};
 };
 

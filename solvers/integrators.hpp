@@ -26,20 +26,22 @@ class Rk4 {
   using State = typename Plant::State;
   using Modes = typename Plant::Modes;
   using Inputs = typename Plant::Inputs;
+  static constexpr int N = Plant::kNumStates;
 
   explicit Rk4(const Plant& plant) : plant_(plant) {}
 
   // Run phase: x(t_s) -> x(t_s + h_s).
   IntegratorStatus step(double t_s, double h_s, const Modes& m, const Inputs& u, State& x) {
-    const double half_s = 0.5 * h_s;
+    const double half_s = 0.5 * h_s, sixth_s = h_s / 6.0;
+    // plain loops over the fixed size: GCC does not inline Eigen's assignment loops here
     plant_.derivatives(t_s, x, m, u, k1_);
-    tmp_ = x + half_s * k1_;
+    for (int i = 0; i < N; ++i) tmp_[i] = x[i] + half_s * k1_[i];
     plant_.derivatives(t_s + half_s, tmp_, m, u, k2_);
-    tmp_ = x + half_s * k2_;
+    for (int i = 0; i < N; ++i) tmp_[i] = x[i] + half_s * k2_[i];
     plant_.derivatives(t_s + half_s, tmp_, m, u, k3_);
-    tmp_ = x + h_s * k3_;
+    for (int i = 0; i < N; ++i) tmp_[i] = x[i] + h_s * k3_[i];
     plant_.derivatives(t_s + h_s, tmp_, m, u, k4_);
-    x += (h_s / 6.0) * (k1_ + 2.0 * k2_ + 2.0 * k3_ + k4_);
+    for (int i = 0; i < N; ++i) x[i] += sixth_s * (k1_[i] + 2.0 * (k2_[i] + k3_[i]) + k4_[i]);
     return {};
   }
 
