@@ -12,10 +12,26 @@ namespace fs = std::filesystem;
 
 namespace ehpt::io {
 
+namespace {
+// Empty, or written by an earlier run: the only folders commit() may replace.
+bool replaceable(const std::string& dir) {
+  std::error_code ec;
+  if (!fs::exists(dir, ec)) return true;
+  if (!fs::is_directory(dir, ec)) return false;
+  if (fs::is_empty(dir, ec)) return true;
+  return fs::exists(dir + "/summary.json", ec) || fs::exists(dir + "/timeseries.csv", ec);
+}
+}  // namespace
+
 bool OutputDir::open(const std::string& final_dir, std::string& error) {
   final_ = final_dir;
   while (final_.size() > 1 && final_.back() == '/') final_.pop_back();
   partial_ = final_ + ".partial";
+  if (!replaceable(final_)) {
+    error = final_ + ": exists and is not an ehpt output folder (no summary.json or timeseries.csv); "
+                     "choose another --out, nothing was run";
+    return false;
+  }
   std::error_code ec;
   fs::remove_all(partial_, ec);
   fs::create_directories(partial_, ec);
@@ -30,6 +46,10 @@ bool OutputDir::commit(std::string& error) {
   std::error_code ec;
   const std::string old = final_ + ".replaced";
   fs::remove_all(old, ec);
+  if (!replaceable(final_)) {
+    error = final_ + ": appeared during the run and is not an ehpt output folder; results kept in " + partial_;
+    return false;
+  }
   if (fs::exists(final_)) {
     fs::rename(final_, old, ec);
     if (ec) {

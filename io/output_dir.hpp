@@ -1,7 +1,10 @@
 #pragma once
 // An output folder that never looks complete before it is: files are written into
 // "DIR.partial" and the folder is renamed to DIR only by commit(). A crash leaves DIR.partial
-// (clearly unfinished, data written so far kept); an older DIR is replaced only at commit.
+// (clearly unfinished, data written so far kept); an older DIR is replaced only at commit,
+// and only if it is empty or an earlier run's output (it holds summary.json or
+// timeseries.csv): open() refuses any other existing DIR, so --out can never wipe a folder
+// of someone's files.
 
 #include <string>
 #include <utility>

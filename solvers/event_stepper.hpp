@@ -3,8 +3,11 @@
 //
 // Crossing convention: each of the plant's kNumCrossings functions z_i(t, x, mode) is > 0
 // while the current mode is valid; the event fires when z_i falls to <= 0 inside a step,
-// i.e. on (t0, t1] (z0 > 0 and z1 <= 0). A z that starts a segment already < 0 (it slid
-// from exactly 0 to below) fires at once. A plant negates z for a "rising" condition.
+// i.e. on (t0, t1] (z0 > 0 and z1 <= 0). A z that starts a segment below zero, or at
+// exactly zero and then goes negative (e.g. v = 0 right after a mode switch, then
+// decreasing), fires at once, at the segment start: the mode is invalid from there on.
+// A z that starts at zero and grows (a bounce) does not fire. A plant negates z for a
+// "rising" condition.
 // The plant provides, besides derivatives():
 //   void crossings(double t_s, const State&, const Modes&, const Inputs&, double* z) const;
 //   void on_crossing(int i, double t_s, State& x, Modes& m, const Inputs&) const;  // mode switch + reset
@@ -71,7 +74,7 @@ class EventStepper {
         int fired = -1;
         double tau_s = t_end - ta;
         for (int i = 0; i < kNumZ; ++i) {
-          if (za_[i] < 0.0) {  // already past zero at the segment start: fire now
+          if (za_[i] < 0.0 || (za_[i] == 0.0 && zb_[i] < 0.0)) {  // invalid from the start: fire now
             fired = i;
             tau_s = 0.0;
             break;

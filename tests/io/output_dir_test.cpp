@@ -17,6 +17,7 @@ TEST(OutputDir, WritesUnderPartialAndRenamesOnCommit) {
   const std::string final_dir = (root / "run").string();
   // an older complete run is replaced only at commit
   fs::create_directories(final_dir);
+  std::ofstream(final_dir + "/summary.json") << "{}";
   std::ofstream(final_dir + "/old.txt") << "old";
   OutputDir dir;
   std::string error;
@@ -29,6 +30,21 @@ TEST(OutputDir, WritesUnderPartialAndRenamesOnCommit) {
   EXPECT_FALSE(fs::exists(final_dir + "/old.txt"));
   EXPECT_FALSE(fs::exists(final_dir + ".partial"));
   EXPECT_FALSE(fs::exists(final_dir + ".replaced"));
+}
+
+TEST(OutputDir, RefusesToReplaceAFolderThatIsNotAnEarlierRun) {
+  const fs::path root = fs::temp_directory_path() / "ehpt_outdir_refuse";
+  fs::remove_all(root);
+  fs::create_directories(root / "notes");
+  std::ofstream(root / "notes" / "notes.txt") << "mine";
+  OutputDir dir;
+  std::string error;
+  EXPECT_FALSE(dir.open((root / "notes").string(), error));
+  EXPECT_NE(error.find("is not an ehpt output folder"), std::string::npos) << error;
+  EXPECT_TRUE(fs::exists(root / "notes" / "notes.txt"));
+  EXPECT_FALSE(fs::exists(root / "notes.partial"));
+  fs::create_directories(root / "empty");
+  EXPECT_TRUE(dir.open((root / "empty").string(), error)) << error;
 }
 
 TEST(JsonObject, OrderedKeysExactNumbersNullForNan) {

@@ -91,6 +91,40 @@ TEST(EventStepper, CapsEventsPerStepAndReportsChattering) {
   EXPECT_NEAR(x[0], 1e-3, 1e-15);  // the step is still completed
 }
 
+// A mode whose crossing starts at exactly zero and falls: invalid from the start.
+struct StartsAtZero {
+  static constexpr int kNumStates = 1;
+  static constexpr int kNumCrossings = 1;
+  using State = Eigen::Matrix<double, 1, 1>;
+  struct Modes {
+    int switched = 0;
+    double at_s = -1.0;
+  };
+  struct Inputs {};
+  void derivatives(double, const State&, const Modes& m, const Inputs&, State& dx) const {
+    dx[0] = m.switched == 0 ? -1.0 : 0.0;
+  }
+  void crossings(double, const State& x, const Modes& m, const Inputs&, double* z) const {
+    z[0] = m.switched == 0 ? x[0] : 1.0;
+  }
+  void on_crossing(int, double t, State&, Modes& m, const Inputs&) const {
+    ++m.switched;
+    m.at_s = t;
+  }
+};
+
+TEST(EventStepper, ACrossingThatStartsAtZeroAndFallsFiresAtTheSegmentStart) {
+  const StartsAtZero plant;
+  Rk4<StartsAtZero> rk4(plant);
+  EventStepper<StartsAtZero, Rk4<StartsAtZero>> stepper(plant, rk4, 0.0, 0.01);
+  StartsAtZero::State x(0.0);
+  StartsAtZero::Modes m;
+  const StepReport r = stepper.advance(0, x, m, {});
+  EXPECT_EQ(r.events, 1);
+  EXPECT_EQ(m.at_s, 0.0);  // not one step late
+  EXPECT_EQ(x[0], 0.0);    // the invalid mode never ran
+}
+
 // z = 1 - t reaches 0 exactly at t = 1, the end of step 7 with h = 0.125 (exact in binary).
 struct Clock {
   static constexpr int kNumStates = 1;
