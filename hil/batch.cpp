@@ -128,6 +128,7 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
   j.integer("chattering_steps", st.chattering_steps);
   j.integer("newton_failures", st.newton_failures);
   j.integer("output_decimation", sc.output.decimation);
+  j.integer("rows_dropped", st.rows_dropped);
 
   double distance_m = 0.0;
   if constexpr (requires { y1.distance_m; }) distance_m = y1.distance_m;
@@ -162,7 +163,7 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
     j.number("ice_on_time_s", st.ice_on_time_s);
     j.integer("ice_starts", st.ice_starts);
   }
-  const double relative = std::abs(audit.residual_J) / std::max(std::abs(audit.sources_J), 1.0);
+  const double relative = std::abs(audit.residual_J) / std::max(audit.scale_J, 1.0);
   j.number("energy_balance_residual_J", audit.residual_J);
   j.number("energy_balance_relative", relative);
   io::JsonObject terms;

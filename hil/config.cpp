@@ -45,9 +45,12 @@ struct Context {
   std::map<std::string, std::pair<std::string, std::vector<int>>> tables;  // field -> csv, row lines
   std::set<std::string> failed_tables;  // fields whose file could not be read: no follow-on problems
 
+  std::set<std::string> reported;  // fields with a problem already: validate() need not repeat it
+
   void error(const std::string& loc, const std::string& field, const std::string& value,
              const std::string& expected) {
     errors.push_back(loc + ": " + field + (value.empty() ? "" : " = " + value) + ": " + expected);
+    reported.insert(field);
   }
 };
 
@@ -427,14 +430,22 @@ plant::BrakeParams read_brake(Reader r) {
   return b;
 }
 
-plant::MapIceParams read_ice(Reader r, bool& on_off, Context& ctx) {
+plant::MapIceParams read_ice(Reader r, Context& ctx) {
   plant::MapIceParams p;
+  const std::string input = r.text("input", "power");
+  if (input == "power") {
+    p.input = plant::IceInput::kPower;
+  } else if (input == "torque") {
+    p.input = plant::IceInput::kTorque;
+  } else {
+    ctx.error(ctx.where[r.field("input")], r.field("input"), "\"" + input + "\"", "must be \"power\" or \"torque\"");
+  }
   p.inertia_kgm2 = r.number("inertia_kgm2", p.inertia_kgm2);
   p.speed_initial_rad_s = r.number("speed_initial_rad_s", p.speed_initial_rad_s);
   p.control_gain_Nm_W = r.number("control_gain_Nm_W", p.control_gain_Nm_W);
   p.fuel_lhv_J_kg = r.number("fuel_lhv_J_kg", p.fuel_lhv_J_kg);
   p.fuel_density_kg_m3 = r.number("fuel_density_kg_m3", p.fuel_density_kg_m3);
-  on_off = r.flag("on_off", false);
+  p.on_off = r.flag("on_off", false);
   const std::string curve = r.path("torque_max_table", true);
   if (!curve.empty()) p.torque_max_Nm = load_curve(curve, r.field("torque_max"), ctx);
   const std::string sfc = r.path("sfc_map", true);
@@ -491,7 +502,7 @@ plant::PsdParams read_psd(Reader& root, const std::string& cycle_path, Context& 
   p.brake = read_brake(root.sub("brake"));
   p.driver = read_driver(root.sub("driver"));
   p.battery = read_battery(root.sub("battery"));
-  p.ice = read_ice(root.sub("ice"), p.ice_on_off, ctx);
+  p.ice = read_ice(root.sub("ice"), ctx);
   p.gen = read_drive(root.sub("gen"), ctx);
   p.mot = read_drive(root.sub("mot"), ctx);
   {
@@ -552,7 +563,8 @@ plant::DriveRigParams read_rig(Reader& root, Context& ctx) {
 // Gives plant/ problems the file and line their value came from.
 void report_plant_problems(const Problems& problems, Context& ctx, std::vector<std::string>* sink = nullptr) {
   for (const plant::Problem& pr : problems.list()) {
-    // a table whose file failed to read was reported already
+    // a table whose file failed to read, or a value the loader rejected, was reported already
+    if (sink == nullptr && ctx.reported.count(pr.field) != 0) continue;
     bool reported = false;
     for (const std::string& failed : ctx.failed_tables) reported = reported || pr.field.rfind(failed, 0) == 0;
     if (reported) continue;
@@ -639,13 +651,21 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
   {
     Reader r = sc.sub("output");
     out.output.signals = r.strings("signals");
+    const bool has_interval = r.has("interval_s"), has_decimation = r.has("decimation");
     const double interval_s = r.number("interval_s", 0.1);
-    out.output.decimation = r.integer("decimation", 0);
-    if (out.output.decimation == 0 && out.solver.step_s > 0.0 && interval_s > 0.0) {
+    out.output.decimation = r.integer("decimation", 1);
+    if (has_interval && has_decimation) {
+      ctx.error(ctx.where["output.decimation"], "output.decimation", std::to_string(out.output.decimation),
+                "give either output.interval_s or output.decimation, not both");
+    } else if (has_decimation) {
+      if (out.output.decimation < 1) {
+        ctx.error(ctx.where["output.decimation"], "output.decimation", std::to_string(out.output.decimation),
+                  "must be >= 1");
+      }
+    } else if (!(interval_s > 0.0) || !std::isfinite(interval_s)) {
+      ctx.error(ctx.where["output.interval_s"], "output.interval_s", io::number_text(interval_s), "must be > 0 s");
+    } else if (out.solver.step_s > 0.0) {
       out.output.decimation = std::max<std::int64_t>(1, std::llround(interval_s / out.solver.step_s));
-    }
-    if (out.output.decimation < 1) {
-      ctx.error(ctx.where["output.decimation"], "output.decimation", std::to_string(out.output.decimation), "must be >= 1");
     }
     r.finish();
   }
@@ -688,6 +708,15 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
     if (problems.empty()) {
       plant::warn(p.gen, "gen", warnings);
       plant::warn(p.mot, "mot", warnings);
+      if (p.ecu.kind == plant::PsdEcuKind::kMBecu2 && !p.ice.on_off) {
+        warnings.add("ice.on_off", "false",
+                     "MBecu2 stops the engine through iceON, which this engine ignores: when OFF only "
+                     "icePowRef = 0, and the power loop may still give torque and burn fuel");
+      }
+      if (p.ice.input == plant::IceInput::kTorque) {
+        warnings.add("ice.input", "\"torque\"",
+                     "the built-in ECUs send icePowRef, not iceTauRef: with them this engine gives no torque");
+      }
     }
     // the ECU runs every whole number of plant steps
     const double period_s = p.ecu.period_s > 0.0 ? p.ecu.period_s : out.solver.step_s;

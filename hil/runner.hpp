@@ -34,6 +34,7 @@ struct RunStats {
   double speed_error_sq_sum = 0.0;
   double speed_error_max_kmh = 0.0;
   double locked_time_s = 0.0;
+  std::int64_t rows_dropped = 0;  // rows not recorded because the buffer was not drained
   // engines: time on and number of starts (off -> on)
   bool has_ice = false;
   double ice_on_time_s = 0.0;
@@ -139,12 +140,14 @@ class Runner {
       stats_.speed_error_max_kmh = std::max(stats_.speed_error_max_kmh, std::abs(err_kmh));
     }
     if constexpr (requires { y_.locked; }) {
-      if (n > 0 && y_.locked != 0.0) stats_.locked_time_s += stepper_.step_s();
+      if (n > 0 && y_.locked != 0.0) ++locked_steps_;
+      stats_.locked_time_s = static_cast<double>(locked_steps_) * stepper_.step_s();
     }
     if constexpr (requires { y_.iceON; }) {
       const bool on = y_.iceON != 0.0;
       stats_.has_ice = true;
-      if (n > 0 && ice_was_on_) stats_.ice_on_time_s += stepper_.step_s();  // on during the step before
+      if (n > 0 && ice_was_on_) ++ice_on_steps_;  // on during the step before
+      stats_.ice_on_time_s = static_cast<double>(ice_on_steps_) * stepper_.step_s();
       if (on && !ice_was_on_ && n > 0) ++stats_.ice_starts;
       if (n == 0 && on) stats_.ice_starts = 1;  // running from the start counts as one start
       ice_was_on_ = on;
@@ -160,6 +163,10 @@ class Runner {
 
   void record_row_once() {
     if (last_recorded_ == n_) return;
+    if ((row_count_ + 1) * columns_.size() > rows_.size()) {  // the caller did not drain: count, never overrun
+      ++stats_.rows_dropped;
+      return;
+    }
     double* row = rows_.data() + row_count_ * columns_.size();
     for (std::size_t c = 0; c < members_.size(); ++c) row[c] = y_.*members_[c];
     ++row_count_;
@@ -170,6 +177,7 @@ class Runner {
   Controller* controller_;
   std::int64_t controller_ratio_;
   bool ice_was_on_ = false;
+  std::int64_t ice_on_steps_ = 0, locked_steps_ = 0;  // counted, not summed: exact times
   Integrator integrator_;
   solvers::EventStepper<Plant, Integrator> stepper_;
   std::int64_t total_steps_, decimation_, chunk_steps_;

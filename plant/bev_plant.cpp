@@ -227,6 +227,7 @@ EnergyAudit BevPlant::audit(const State& x0, const State& x) const {
   const double potential_J = p_.body.mass_kg * kGravity_m_s2 * delta(kAltitude);
   EnergyAudit a;
   a.sources_J = stored_out_J;
+  a.scale_J = std::abs(stored_out_J);
   a.battery_out_J = delta(kBatteryOutJ);
   a.residual_J = stored_out_J - (delta(kRoadJ) + delta(kDriveLossJ) + delta(kBatteryLossJ) + delta(kBrakeJ) +
                                  kinetic_J + potential_J);

@@ -139,6 +139,7 @@ EnergyAudit DriveRig::audit(const State& x0, const State& x) const {
   const double kinetic_J = 0.5 * total_inertia_kgm2() * (x[kSpeed] * x[kSpeed] - x0[kSpeed] * x0[kSpeed]);
   EnergyAudit a;
   a.sources_J = dc_J;
+  a.scale_J = std::abs(dc_J);
   a.residual_J = dc_J - (losses_J + load_J + kinetic_J);
   a.terms = {{"dc_source_out_J", dc_J},
              {"drive_losses_J", losses_J},

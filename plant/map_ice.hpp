@@ -26,7 +26,11 @@
 
 namespace ehpt::plant {
 
+enum class IceInput { kPower, kTorque };
+
 struct MapIceParams {
+  IceInput input = IceInput::kPower;  // IceConnP (power request) or IceT (torque request)
+  bool on_off = false;                // IceConnPOO: obeys the ON flag; otherwise always on
   double inertia_kgm2 = 0.5;
   double speed_initial_rad_s = 167.0;
   double control_gain_Nm_W = 0.1;  // K of the power loop (contrGain)
@@ -45,6 +49,20 @@ class MapIce {
   const MapIceParams& params() const { return p_; }
 
   // Run phase: pure functions.
+  // Whether the engine runs: an ON/OFF engine follows the flag, the others always run.
+  bool running(bool on_flag) const { return !p_.on_off || on_flag; }
+  // Engine torque for the bus command (power or torque request per the engine's input);
+  // dw/dt = a0 + a1 tau for the power loop. An engine that is off gives no torque.
+  double torque_Nm(bool on_flag, double power_ref_W, double torque_ref_Nm, double speed_rad_s, double a0,
+                   double a1) const {
+    if (!running(on_flag)) return 0.0;
+    return p_.input == IceInput::kTorque ? torque_for_request_Nm(torque_ref_Nm, speed_rad_s)
+                                         : torque_for_power_Nm(power_ref_W, speed_rad_s, a0, a1);
+  }
+  // Fuel mass flow; none while off.
+  double fuel_rate_kg_s(bool on_flag, double torque_Nm, double speed_rad_s) const {
+    return running(on_flag) ? fuel_rate_kg_s(torque_Nm, speed_rad_s) : 0.0;
+  }
   double torque_max_Nm(double speed_rad_s) const { return p_.torque_max_Nm(speed_rad_s); }
   double torque_for_request_Nm(double torque_ref_Nm, double speed_rad_s) const {
     const double t = torque_ref_Nm > 0.0 ? torque_ref_Nm : 0.0;

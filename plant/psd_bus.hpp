@@ -18,11 +18,13 @@ struct PsdBus {
   double motW_rad_s = 0.0;      // mot (ring) speed
   double motPowDelA_W = 0.0;    // power mot delivers through flange A (ring side)
   double motPowDelB_W = 0.0;    // power mot delivers through flange B (final gear) = traction power
+  double motPowDelAB_W = 0.0;   // A + B
   double motTauLim_Nm = 0.0;    // max torque mot can deliver at its speed
   double batSOC = 0.0;          // battery state of charge
   double batPowDel_W = 0.0;     // battery terminal power
   // ---- ECU -> plant ----
-  double icePowRef_W = 0.0;     // power the engine is asked to deliver
+  double icePowRef_W = 0.0;     // power the engine is asked to deliver (power-input engine)
+  double iceTauRef_Nm = 0.0;    // torque the engine is asked to deliver (torque-input engine, P15 MBice)
   double genTauRef_Nm = 0.0;    // torque asked of gen
   double motTauRef_Nm = 0.0;    // torque asked of mot
   bool iceON = true;            // engine on (ON/OFF engines only)

@@ -110,7 +110,6 @@ PsdPlant::Eval PsdPlant::evaluate(double t_s, const State& x, const Modes& m, co
   e.grade_force_N = road_.grade_force_N(e.grade_rad);
   const double unmet_braking_Nm = tau_m - u.motTauRef_Nm;
   e.brake_N = unmet_braking_Nm > 0.0 ? brake_gain_ * unmet_braking_Nm : 0.0;
-  const bool ice_on = !p_.ice_on_off || u.iceON;
   // engine torque from the power loop, with dw_c/dt = a0 + a1 tau_ice
   double a0 = 0.0, a1 = 0.0, q2 = 0.0;
   if (m.motion == Motion::kStuck) {
@@ -125,8 +124,8 @@ PsdPlant::Eval PsdPlant::evaluate(double t_s, const State& x, const Modes& m, co
     a0 = i11_ * (1.0 + rho_) * tau_g + i12_ * q2;
     e.road_N = m.motion == Motion::kForward ? e.rolling_N + e.speed_force_N : -e.rolling_N + e.speed_force_N;
   }
-  e.ice_torque_Nm = ice_on ? ice_.torque_for_power_Nm(u.icePowRef_W, w_c, a0, a1) : 0.0;
-  e.fuel_rate_kg_s = ice_on ? ice_.fuel_rate_kg_s(e.ice_torque_Nm, w_c) : 0.0;
+  e.ice_torque_Nm = ice_.torque_Nm(u.iceON, u.icePowRef_W, u.iceTauRef_Nm, w_c, a0, a1);
+  e.fuel_rate_kg_s = ice_.fuel_rate_kg_s(u.iceON, e.ice_torque_Nm, w_c);
   e.ice_accel_rad_s2 = a0 + a1 * e.ice_torque_Nm;
   if (m.motion == Motion::kStuck) {
     // the ring is held: the road reacts with what the shafts push
@@ -208,6 +207,7 @@ void PsdPlant::sense_from(const Eval& e, const State& x, const Modes& m, PsdBus&
                               : -e.rolling_N + e.speed_force_N + e.grade_force_N - e.brake_N;
   bus.motPowDelB_W = (p_.body.mass_kg * accel_m_s2 + resist_N) * v;
   const double pow_ab_W = (e.mot.torque_Nm - p_.mot.inertia_kgm2 * e.ring_accel_rad_s2) * w_r;
+  bus.motPowDelAB_W = pow_ab_W;
   bus.motPowDelA_W = pow_ab_W - bus.motPowDelB_W;
   bus.motTauLim_Nm = e.mot.limit_Nm;
   bus.batSOC = battery_.soc(x[kEmf]);
@@ -227,7 +227,7 @@ void PsdPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs&
   y.ice_torque_Nm = e.ice_torque_Nm;
   y.icePowDel_W = bus.icePowDel_W;
   y.icePowRef_W = u.icePowRef_W;
-  y.iceON = (!p_.ice_on_off || u.iceON) ? 1.0 : 0.0;
+  y.iceON = ice_.running(u.iceON) ? 1.0 : 0.0;
   y.fuel_rate_g_s = 1e3 * e.fuel_rate_kg_s;
   y.fuel_g = 1e3 * x[kFuelKg];
   y.sfc_g_kWh = e.ice_torque_Nm > 0.0 ? ice_.sfc_g_kWh(e.ice_torque_Nm, x[kIceSpeed]) : 0.0;
@@ -275,6 +275,7 @@ EnergyAudit PsdPlant::audit(const State& x0, const State& x) const {
   const double potential_J = p_.body.mass_kg * kGravity_m_s2 * delta(kAltitude);
   EnergyAudit a;
   a.sources_J = fuel_J + stored_out_J;
+  a.scale_J = std::abs(ice_work_J) + std::abs(stored_out_J);
   a.battery_out_J = delta(kBatteryOutJ);
   // engine losses = fuel energy - engine work, so the fuel term cancels and the residual
   // checks the mechanical and electrical integration

@@ -18,8 +18,9 @@
 // Vehicle stuck (DragForce locked, §7.2): w_r = 0, one degree of freedom,
 //   (J_i + J_g (1+rho)^2) dw_c/dt = tau_ice + (1+rho) tau_g, and the road must hold
 //   F_applied = (G/r)(tau_m - rho tau_g + J_g rho (1+rho) dw_c/dt) - F_grade.
-// Engine (§3.5/3.6): power loop solved exactly with dw_c/dt = a0 + a1 tau_ice; OFF (ON/OFF
-// engine and bus.iceON false) gives no torque and no fuel.
+// Engine (§3.4-3.6): power loop solved exactly with dw_c/dt = a0 + a1 tau_ice (or a torque
+// request for a torque-input engine); OFF (ON/OFF engine and bus.iceON false) gives no
+// torque and no fuel.
 // Friction brake: the braking mot could not deliver, F = (G/r) max(0, tau_m - motTauRef).
 //
 // State (one flat vector): 0 w_c (rad/s), 1 w_r (rad/s), 2 s (m), 3 E (V), 4 v_rc (V),
@@ -53,8 +54,7 @@ struct PsdParams {
   BrakeParams brake;
   PropDriverParams driver;     // request in per unit (k = 1 / (m/s), yMax = 1.8)
   BatteryRcParams battery;
-  MapIceParams ice;
-  bool ice_on_off = false;     // IceConnPOO: obeys bus.iceON; else IceConnP, always on
+  MapIceParams ice;            // input kPower (IceConnP) or kTorque; on_off: IceConnPOO
   MapDriveParams gen;          // one-flange drive on the sun
   MapDriveParams mot;          // two-flange drive on the ring
   double ring_sun_ratio = 78.0 / 30.0;

@@ -32,6 +32,9 @@ enum Fault : unsigned {
 struct EnergyAudit {
   double sources_J = 0.0;
   double residual_J = 0.0;
+  // what the residual is relative to: the energy that actually flowed through the balance
+  // (a term that appears on both sides, like fuel energy in a hybrid, is left out)
+  double scale_J = 0.0;
   double battery_out_J = 0.0;  // net out of the battery terminals (0 without a battery)
   std::vector<std::pair<std::string, double>> terms;
 };

@@ -63,5 +63,22 @@ TEST(Config, ProblemsNameWhereTheValueCameFrom) {
   EXPECT_EQ(errors[2], "--set vehicle.vehicle.mass_kg=-5: vehicle.mass_kg = -5: must be a finite number > 0");
 }
 
+TEST(Config, OutputIntervalAndDecimationAreCheckedAndEachProblemReportedOnce) {
+  Scenario sc;
+  std::vector<std::string> errors;
+  EXPECT_FALSE(load_scenario(test::source_path("scenarios/ev_sort1.toml"), {"output.interval_s=-1"}, sc, errors));
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_EQ(errors[0], "--set output.interval_s=-1: output.interval_s = -1: must be > 0 s");
+  errors.clear();
+  EXPECT_FALSE(load_scenario(test::source_path("scenarios/ev_sort1.toml"), {"output.decimation=10"}, sc, errors));
+  ASSERT_EQ(errors.size(), 1u);  // ev_sort1 gives interval_s already
+  EXPECT_NE(errors[0].find("give either output.interval_s or output.decimation"), std::string::npos);
+  errors.clear();
+  EXPECT_FALSE(
+      load_scenario(test::source_path("scenarios/ev_sort1.toml"), {"vehicle.driver.gain=abc"}, sc, errors));
+  ASSERT_EQ(errors.size(), 1u) << errors[0] << " / " << errors.back();
+  EXPECT_EQ(errors[0], "--set vehicle.driver.gain=abc: driver.gain = 'abc': must be a number");
+}
+
 }  // namespace
 }  // namespace ehpt::hil

@@ -72,7 +72,7 @@ struct ConstantCurrentBattery {
   struct Modes {};
   struct Inputs {};
   BatteryRc battery;
-  double current_A;
+  double current_A;  // > 0 discharging
   void derivatives(double, const State& x, const Modes&, const Inputs&, State& dx) const {
     const BatteryTerminal b = battery.at_current(x[0], x[1], current_A);
     dx[0] = battery.demf_dt(b);
@@ -103,6 +103,45 @@ TEST(BatteryRc, ConstantCurrentDischargeMatchesClosedForm) {
   // energy: decrease of the stored energy = energy out + losses
   const double stored_out = plant.battery.stored_energy_J(e0, 0.0) - plant.battery.stored_energy_J(x[0], x[1]);
   EXPECT_NEAR(stored_out, x[2] + x[3], 1e-6 * stored_out);
+}
+
+TEST(BatteryRc, AFullSwingAtTheEfficiencyCurrentGivesTheStatedRoundTripEfficiency) {
+  // discharge SOC 1 -> 0 and charge 0 -> 1 at the cell current I_eff; the energy ratio is the
+  // stated efficiency up to the RC block's transients (the derivation of k assumes v_rc at
+  // steady state); without the parasitic branch it would be eta_max = 0.905
+  for (double eta : {0.80, 0.85}) {
+    BatteryRcParams params = psd_battery();
+    params.efficiency = eta;
+    params.soc_initial = 1.0;
+    const BatteryRc battery(params);
+    const BatteryRcConstants& c = battery.constants();
+    ConstantCurrentBattery plant{battery, 97.5};
+    ConstantCurrentBattery::State x;
+    x << c.emf_max_V, 0.0, 0.0, 0.0;
+    const double h = 0.01;
+    int n = 0;
+    for (solvers::Rk4<ConstantCurrentBattery> rk4(plant); battery.soc(x[0]) > 0.0; ++n) rk4.step(n * h, h, {}, {}, x);
+    const double energy_out_J = x[2];
+    plant.current_A = -97.5;
+    x[2] = 0.0;
+    for (solvers::Rk4<ConstantCurrentBattery> rk4(plant); battery.soc(x[0]) < 1.0; ++n) rk4.step(n * h, h, {}, {}, x);
+    const double energy_in_J = -x[2];
+    // the RC block starts each half-swing relaxed, so it loses a little less than assumed
+    EXPECT_GT(energy_out_J / energy_in_J, eta);
+    EXPECT_LT(energy_out_J / energy_in_J, eta + 0.01);
+  }
+}
+
+TEST(BatteryRc, ParallelStringsScaleThePackNotTheCell) {
+  BatteryRcParams one = psd_battery(), two = psd_battery();
+  two.strings_parallel = 2;
+  const BatteryRcConstants a = derive(one), b = derive(two);
+  EXPECT_NEAR(b.c_batt_F, 2.0 * a.c_batt_F, 1e-9);
+  EXPECT_NEAR(b.r0_Ohm, 0.5 * a.r0_Ohm, 1e-15);
+  EXPECT_NEAR(b.c1_F, 2.0 * a.c1_F, 1e-9);
+  EXPECT_NEAR(b.current_max_A, 2.0 * a.current_max_A, 1e-9);
+  EXPECT_EQ(b.emf_max_V, a.emf_max_V);
+  EXPECT_EQ(b.k_parasitic, a.k_parasitic);  // cell values: the same efficiency per cell (§6.3)
 }
 
 TEST(BatteryRc, ConstantPowerLoadSolvesTheNodeAndFlagsInfeasiblePower) {

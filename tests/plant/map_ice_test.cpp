@@ -63,43 +63,50 @@ TEST(MapIce, ValidateRejectsNegativeSfcAndBadCurves) {
 }
 
 // §11.4 rigs: ICE + load inertia + quadratic load -80 (w/100)^2 N m; the request is a
-// trapezoid (torque, or power for the power-input engine); iceON false in [off_from, off_to).
+// trapezoid (a torque, or a power for the power-input engine), held over each step with the
+// ON flag, as an ECU would send them. Torque and fuel come from MapIce itself.
 struct IceRig {
   static constexpr int kNumStates = 3;  // w, fuel kg, engine work J
   using State = Eigen::Matrix<double, kNumStates, 1>;
   struct Modes {};
   struct Inputs {
-    bool on = true;  // held over a step, as the ECU's iceON
+    double request = 0.0;  // N m or W
+    bool on = true;
   };
   MapIce ice;
   double load_inertia_kgm2;
-  bool power_input;
   Trapezoid request;
   double off_from_s = -1.0, off_to_s = -1.0;
 
   double inertia() const { return ice.params().inertia_kgm2 + load_inertia_kgm2; }
   double load_Nm(double w) const { return -80.0 * (w / 100.0) * (w / 100.0); }
-  bool on(double t) const { return !(t >= off_from_s - 1e-9 && t < off_to_s - 1e-9); }
-  double torque(double t, double w, bool on = true) const {
-    if (!on) return 0.0;
-    const double r = trapezoid(request, t);
-    if (!power_input) return ice.torque_for_request_Nm(r, w);
-    // dw/dt = a0 + a1 tau with the load inertia on the same shaft
-    return ice.torque_for_power_Nm(r, w, load_Nm(w) / inertia(), 1.0 / inertia());
+  Inputs inputs(double t) const {
+    return {trapezoid(request, t), !(t >= off_from_s - 1e-9 && t < off_to_s - 1e-9)};
   }
-  void derivatives(double t, const State& x, const Modes&, const Inputs& u, State& dx) const {
-    const double tau = torque(t, x[0], u.on);
+  double torque(const Inputs& u, double w) const {
+    // dw/dt = a0 + a1 tau with the load inertia on the same shaft
+    return ice.torque_Nm(u.on, u.request, u.request, w, load_Nm(w) / inertia(), 1.0 / inertia());
+  }
+  void derivatives(double, const State& x, const Modes&, const Inputs& u, State& dx) const {
+    const double tau = torque(u, x[0]);
     dx[0] = (tau + load_Nm(x[0])) / inertia();
-    dx[1] = u.on ? ice.fuel_rate_kg_s(tau, x[0]) : 0.0;
+    dx[1] = ice.fuel_rate_kg_s(u.on, tau, x[0]);
     dx[2] = tau * x[0];
   }
   // icePowDel: power at the engine flange
-  double power_delivered_W(double t, double w) const {
-    const double tau = torque(t, w);
-    const double accel = (tau + load_Nm(w)) / inertia();
-    return (tau - ice.params().inertia_kgm2 * accel) * w;
+  double power_delivered_W(const Inputs& u, double w) const {
+    const double tau = torque(u, w);
+    return (tau - ice.params().inertia_kgm2 * (tau + load_Nm(w)) / inertia()) * w;
   }
 };
+
+MapIce ice_with(IceInput input, double gain, bool on_off) {
+  MapIceParams p = psd_ice();
+  p.input = input;
+  p.control_gain_Nm_W = gain;
+  p.on_off = on_off;
+  return MapIce(p);
+}
 
 template <class F>
 void simulate(const IceRig& rig, double w0, double t_end, F each_step) {
@@ -108,16 +115,16 @@ void simulate(const IceRig& rig, double w0, double t_end, F each_step) {
   const double h = 1e-3;
   for (int n = 0; n * h < t_end; ++n) {
     each_step(n * h, x);
-    rk4.step(n * h, h, {}, IceRig::Inputs{rig.on(n * h)}, x);
+    rk4.step(n * h, h, {}, rig.inputs(n * h), x);
   }
 }
 
 TEST(IceTestRigs, TestIceTRequestAboveTheCurveIsTorqueLimited) {
   // V3 TestIceT: request 50 -> 85 N m, start 78 rad/s, PSDmaps max-torque curve
-  IceRig rig{MapIce(psd_ice()), 0.5, false, {50.0, 35.0, 10.0, 10.0, 10.0, 10.0, 1e6}};
+  IceRig rig{ice_with(IceInput::kTorque, 0.1, false), 0.5, {50.0, 35.0, 10.0, 10.0, 10.0, 10.0, 1e6}};
   bool limited = false;
   simulate(rig, 78.0, 60.0, [&](double t, const IceRig::State& x) {
-    const double tau = rig.torque(t, x[0]);
+    const double tau = rig.torque(rig.inputs(t), x[0]);
     EXPECT_LE(tau, rig.ice.torque_max_Nm(x[0]) + 1e-12);
     if (t > 20.0 && t < 30.0) limited = limited || tau < trapezoid(rig.request, t) - 1.0;
     if (t < 10.0) {
@@ -130,17 +137,15 @@ TEST(IceTestRigs, TestIceTRequestAboveTheCurveIsTorqueLimited) {
 TEST(IceTestRigs, TestIcePProportionalLoopLeavesASteadyError) {
   // TestIceP: contrGain 1, request 4 -> 6 kW, start 80 rad/s; at steady state
   // P_ref - icePowDel = tau / K (no integral action)
-  MapIceParams p = psd_ice();
-  p.control_gain_Nm_W = 1.0;
-  IceRig rig{MapIce(p), 0.5, true, {4000.0, 2000.0, 10.0, 10.0, 10.0, 10.0, 1e6}};
+  IceRig rig{ice_with(IceInput::kPower, 1.0, false), 0.5, {4000.0, 2000.0, 10.0, 10.0, 10.0, 10.0, 1e6}};
   double w_at_9 = 0.0, w_at_29 = 0.0;
   simulate(rig, 80.0, 30.0, [&](double t, const IceRig::State& x) {
     if (std::abs(t - 9.0) < 5e-4) w_at_9 = x[0];
     if (std::abs(t - 29.0) < 5e-4) w_at_29 = x[0];
   });
   for (const auto& [t, w, p_ref] : {std::tuple{9.0, w_at_9, 4000.0}, std::tuple{29.0, w_at_29, 6000.0}}) {
-    const double tau = rig.torque(t, w);
-    const double p_del = rig.power_delivered_W(t, w);
+    const double tau = rig.torque(rig.inputs(t), w);
+    const double p_del = rig.power_delivered_W(rig.inputs(t), w);
     EXPECT_LT(p_del, p_ref);                          // below the request...
     EXPECT_NEAR(p_ref - p_del, tau / 1.0, 1e-6 * p_ref);  // ...by tau / K
     EXPECT_NEAR(tau, -rig.load_Nm(w), 1e-3);          // and at the load's steady state
@@ -149,13 +154,11 @@ TEST(IceTestRigs, TestIcePProportionalLoopLeavesASteadyError) {
 
 TEST(IceTestRigs, TestIceConnOONoPowerAndNoFuelWhileOff) {
   // TestIceConnOO: request 4 -> 6 kW, start 80 rad/s, engine OFF between 25 and 30 s
-  MapIceParams p = psd_ice();
-  p.control_gain_Nm_W = 0.5;
-  IceRig rig{MapIce(p), 10.0, true, {4000.0, 2000.0, 10.0, 10.0, 10.0, 10.0, 1e6}, 25.0, 30.0};
+  IceRig rig{ice_with(IceInput::kPower, 0.5, true), 10.0, {4000.0, 2000.0, 10.0, 10.0, 10.0, 10.0, 1e6}, 25.0, 30.0};
   double fuel_at_25 = -1.0, fuel_at_30 = -1.0, fuel_at_31 = -1.0;
   simulate(rig, 80.0, 40.0, [&](double t, const IceRig::State& x) {
-    if (!rig.on(t)) {
-      EXPECT_EQ(rig.torque(t, x[0], false), 0.0);
+    if (!rig.inputs(t).on) {
+      EXPECT_EQ(rig.torque(rig.inputs(t), x[0]), 0.0);
     }
     if (std::abs(t - 25.0) < 5e-4) fuel_at_25 = x[1];
     if (std::abs(t - 30.0) < 5e-4) fuel_at_30 = x[1];

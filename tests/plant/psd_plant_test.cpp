@@ -41,10 +41,15 @@ TEST(Planetary, WillisAndTheTorqueBalanceHoldAtEveryStep) {
   int checked = 0;
   drive(p, 400.0, [&](std::int64_t n, double t, const PsdPlant::State& x, const PsdPlant::Modes& m,
                       const PsdPlant::Outputs& y) {
-    // Willis on the reported speeds: (1 + rho) w_c = w_s + rho w_r
+    // Willis on the reported speeds: (1 + rho) w_c = w_s + rho w_r (the sun speed is derived
+    // from it, so this guards the outputs, not the dynamics)
     const double lhs = (1.0 + rho) * y.iceW_rad_s, rhs = y.genW_rad_s + rho * y.motW_rad_s;
     ASSERT_LE(std::abs(lhs - rhs), 1e-9 * std::max(1.0, std::abs(lhs))) << t;
-    ASSERT_NEAR(y.speed_m_s, y.motW_rad_s * ratio, 1e-12);
+    // the massless, lossless gear neither stores nor loses power: what the engine, gen and
+    // mot deliver at their flanges (bus signals, from the solved accelerations) sums to zero
+    const double flange_sum = y.icePowDel_W + y.genPowDel_W + y.motPowDelA_W;
+    const double flange_scale = std::abs(y.icePowDel_W) + std::abs(y.genPowDel_W) + std::abs(y.motPowDelA_W);
+    ASSERT_LE(std::abs(flange_sum), 1e-9 * flange_scale + 1e-9) << t;
     if (n % 997 != 0 || m.motion == Motion::kStuck) return;
     // torques the outside applies to the three flanges of the massless gear
     PsdBus bus;
@@ -161,7 +166,7 @@ TEST(PaperPsecu2OnNedc, FollowsHoldsSocSwitchesTheEngineAndBalancesEnergy) {
   EXPECT_LT(creep_m, 1e-3);
   EXPECT_TRUE(locked_at_11s);
   EXPECT_EQ(st.chattering_steps, 0);
-  EXPECT_GT(st.ice_starts, 1);
+  EXPECT_EQ(st.ice_starts, 4);  // 336.8, 532.2, 727.5, 827.8 s
   // stated limits: the library's driver (k = 1 per m/s, 80 N m per unit) lags in the
   // accelerations by up to ~5.5 km/h; its request saturates at 1.8 per unit in the final
   // 120 -> 0 km/h braking, where the car falls up to ~11 km/h behind
@@ -170,12 +175,23 @@ TEST(PaperPsecu2OnNedc, FollowsHoldsSocSwitchesTheEngineAndBalancesEnergy) {
   EXPECT_LT(max_err, 12.0);
   EXPECT_NEAR(dist, 10983.0, 0.01 * 10983.0);
   EXPECT_LT(std::abs(soc_end - 0.6), 0.05);
-  EXPECT_LE(std::abs(audit.residual_J), 1e-6 * std::abs(audit.sources_J));
+  EXPECT_LE(std::abs(audit.residual_J), 1e-6 * audit.scale_J);
+  // the fuel term cancels in the balance, so check it on its own: the average specific
+  // consumption (fuel / engine work) must lie inside the sfc map (228..630 g/kWh) and near
+  // its best region, where MBecu2 keeps the engine (~90 N m, P15 rule 1)
+  double fuel_J = 0.0, work_J = 0.0;
+  for (const auto& [name, value] : audit.terms) {
+    if (name == "fuel_chemical_J") fuel_J = value;
+    if (name == "engine_work_J") work_J = value;
+  }
+  const double avg_sfc_g_kWh = fuel_J / p.ice.fuel_lhv_J_kg * 1e3 / (work_J / 3.6e6);
+  EXPECT_GT(avg_sfc_g_kWh, 228.0);
+  EXPECT_LT(avg_sfc_g_kWh, 270.0);
 }
 
 TEST(PaperPsecu2OnNedc, OnOffEngineUsesAtLeast20PercentLessFuelThanAlwaysOn) {
   const PsdParams on_off = psecu("psecu2_nedc.toml");
-  const PsdParams always = psecu("psecu2_nedc.toml", {"vehicle.ecu.kind=MBecu1soc", "vehicle.ice.on_off=false"});
+  const PsdParams always = psecu("psecu2_nedc.toml", {"vehicle.ecu.kind=MBecu1soc"});
   double fuel_on_off = 0.0, fuel_always = 0.0;
   drive(on_off, 1400.0, [&](std::int64_t, double, const auto&, const auto&, const auto& y) { fuel_on_off = y.fuel_g; });
   drive(always, 1400.0, [&](std::int64_t, double, const auto&, const auto&, const auto& y) { fuel_always = y.fuel_g; });
@@ -188,7 +204,7 @@ TEST(PsdOnNedc, EveryEcuClosesTheEnergyBalanceAndTheAlwaysOnEngineRunsThroughout
     EnergyAudit audit;
     const hil::RunStats st = drive(psecu(s), 1400.0, [](std::int64_t, double, const auto&, const auto&, const auto&) {},
                                    &audit);
-    EXPECT_LE(std::abs(audit.residual_J), 1e-6 * std::abs(audit.sources_J)) << s;
+    EXPECT_LE(std::abs(audit.residual_J), 1e-6 * audit.scale_J) << s;
     EXPECT_EQ(st.ice_starts, 1) << s;
     EXPECT_NEAR(st.ice_on_time_s, 1400.0, 1e-6) << s;
   }
