@@ -482,12 +482,9 @@ plant::PsdEcuParams read_ecu(Reader r, Context& ctx) {
                                             plant::Extrapolation::kLinear);
   }
   p.soc_ref = r.number("soc_ref", p.soc_ref);
-  if (p.kind == plant::PsdEcuKind::kMBecu1) {
-    if (r.has("soc_loop_gain_W")) r.number("soc_loop_gain_W", 0.0);  // allowed, unused
-    p.soc_loop_gain_W = 0.0;
-  } else {
-    p.soc_loop_gain_W = r.required_number("soc_loop_gain_W");
-  }
+  // MBecu1 has no SOC loop (PsdEcu ignores the gain); the others need it
+  p.soc_loop_gain_W = p.kind == plant::PsdEcuKind::kMBecu1 ? r.number("soc_loop_gain_W", 0.0)
+                                                           : r.required_number("soc_loop_gain_W");
   p.on_threshold_W = r.number("on_threshold_W", p.on_threshold_W);
   p.off_threshold_W = r.number("off_threshold_W", p.off_threshold_W);
   p.ice_off_speed_ref_rad_s = r.number("ice_off_speed_ref_rad_s", p.ice_off_speed_ref_rad_s);
@@ -686,24 +683,27 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
   vr.text("description", "");
   const std::string kind = vr.text("kind", "");
   Problems problems, warnings;
-  if (kind == "bev") {
+  // vehicles with a driver: a cycle is required, and its length is the default duration
+  const auto need_cycle = [&]() {
     if (out.cycle_path.empty()) ctx.error(path, "cycle", "", "missing (a vehicle with a driver needs a cycle file)");
+  };
+  const auto default_duration = [&](const plant::PropDriverParams& driver) {
+    if (!driver.cycle_m_s.empty() && out.solver.duration_s == 0.0) out.solver.duration_s = driver.cycle_m_s.x().back();
+  };
+  if (kind == "bev") {
+    need_cycle();
     plant::BevParams p = read_bev(vr, out.cycle_path, ctx);
     vr.finish();
-    if (!p.driver.cycle_m_s.empty()) {
-      if (out.solver.duration_s == 0.0) out.solver.duration_s = p.driver.cycle_m_s.x().back();
-    }
+    default_duration(p.driver);
     plant::validate(p, problems);
     if (problems.empty()) plant::warn(p.drive, "drive", warnings);
     check_signals(plant::BevPlant::kSignals, out.output.signals, ctx);
     out.plant = std::move(p);
   } else if (kind == "psd") {
-    if (out.cycle_path.empty()) ctx.error(path, "cycle", "", "missing (a vehicle with a driver needs a cycle file)");
+    need_cycle();
     plant::PsdParams p = read_psd(vr, out.cycle_path, ctx);
     vr.finish();
-    if (!p.driver.cycle_m_s.empty()) {
-      if (out.solver.duration_s == 0.0) out.solver.duration_s = p.driver.cycle_m_s.x().back();
-    }
+    default_duration(p.driver);
     plant::validate(p, problems);
     if (problems.empty()) {
       plant::warn(p.gen, "gen", warnings);

@@ -24,6 +24,7 @@
 #include <string>
 
 #include "plant/problems.hpp"
+#include "plant/signals.hpp"
 
 namespace ehpt::plant {
 
@@ -101,6 +102,11 @@ class BatteryRc {
     return s >= c_.soc_min && s <= c_.soc_max;
   }
   bool current_in_limit(double current_A) const { return std::abs(current_A) < c_.current_max_A; }
+  // plant::Fault bits for this operating point (SOC window, cell current, infeasible load).
+  unsigned faults(double emf_V, const BatteryTerminal& b) const {
+    return (soc_in_window(emf_V) ? 0u : kFaultSocWindow) | (current_in_limit(b.current_A) ? 0u : kFaultCellCurrent) |
+           (b.feasible ? 0u : kFaultPowerInfeasible);
+  }
 
  private:
   BatteryRcConstants c_;

@@ -72,9 +72,7 @@ BevPlant::BevPlant(const BevParams& params)
   g_over_r_ = p_.body.gear_ratio / p_.body.wheel_radius_m;
   mass_eff_kg_ = p_.body.mass_kg + p_.drive.inertia_kgm2 * g_over_r_ * g_over_r_;
   inv_mass_eff_kg_ = 1.0 / mass_eff_kg_;
-  brake_gain_ = !p_.brake.enabled ? 0.0
-                : p_.brake.library_gain ? p_.body.gear_ratio * p_.body.wheel_radius_m
-                                        : g_over_r_;
+  brake_gain_ = brake_gain_N_per_Nm(p_.brake, p_.body);
 }
 
 BevPlant::State BevPlant::initial_state() const {
@@ -206,12 +204,7 @@ void BevPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs&
   y.battery_emf_V = x[kEmf];
   y.soc = battery_.soc(x[kEmf]);
   y.locked = m.motion == Motion::kStuck ? 1.0 : 0.0;
-  unsigned f = kFaultNone;
-  if (!battery_.soc_in_window(x[kEmf])) f |= kFaultSocWindow;
-  if (!battery_.current_in_limit(e.battery.current_A)) f |= kFaultCellCurrent;
-  if (!e.battery.feasible) f |= kFaultPowerInfeasible;
-  if (!x.allFinite()) f |= kFaultNonFinite;
-  y.fault = f;
+  y.fault = battery_.faults(x[kEmf], e.battery) | (x.allFinite() ? 0u : kFaultNonFinite);
   y.battery_out_J = x[kBatteryOutJ];
   y.road_work_J = x[kRoadJ];
   y.drive_loss_J = x[kDriveLossJ];

@@ -50,6 +50,13 @@ struct BrakeParams {
   bool library_gain = false;  // reproduce MBEV's G*r gain instead of G/r (source defect)
 };
 
+// Wheel force per N m of unmet braking torque at the drive shaft: G / r, or the MBEV's
+// G * r when reproducing that source defect (§10.3); 0 without a brake.
+inline double brake_gain_N_per_Nm(const BrakeParams& brake, const VehicleBodyParams& body) {
+  if (!brake.enabled) return 0.0;
+  return brake.library_gain ? body.gear_ratio * body.wheel_radius_m : body.gear_ratio / body.wheel_radius_m;
+}
+
 struct BevParams {
   VehicleBodyParams body;
   RoadLoadParams road;

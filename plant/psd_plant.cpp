@@ -75,9 +75,7 @@ PsdPlant::PsdPlant(const PsdParams& params)
   i11_ = m22_ / det;
   i12_ = -m12_ / det;
   i22_ = m11_ / det;
-  brake_gain_ = !p_.brake.enabled ? 0.0
-                : p_.brake.library_gain ? p_.body.gear_ratio * p_.body.wheel_radius_m
-                                        : g_over_r_;
+  brake_gain_ = brake_gain_N_per_Nm(p_.brake, p_.body);
 }
 
 PsdPlant::State PsdPlant::initial_state() const {
@@ -116,9 +114,8 @@ PsdPlant::Eval PsdPlant::evaluate(double t_s, const State& x, const Modes& m, co
     a1 = 1.0 / m11_;
     a0 = (1.0 + rho_) * tau_g * a1;
   } else {
-    const double resist_N = m.motion == Motion::kForward
-                                ? e.rolling_N + e.speed_force_N + e.grade_force_N + e.brake_N
-                                : -e.rolling_N + e.speed_force_N + e.grade_force_N - e.brake_N;
+    const double resist_N =
+        resisting_force_N(m.motion, e.rolling_N, e.speed_force_N, e.grade_force_N, e.brake_N);
     q2 = tau_m - rho_ * tau_g - r_over_g_ * resist_N;
     a1 = i11_;
     a0 = i11_ * (1.0 + rho_) * tau_g + i12_ * q2;
@@ -201,10 +198,7 @@ void PsdPlant::sense_from(const Eval& e, const State& x, const Modes& m, PsdBus&
   // flange B drives the final gear: traction power = (m dv/dt + resisting forces) v
   const double accel_m_s2 = e.ring_accel_rad_s2 * r_over_g_;
   const double v = e.speed_m_s;
-  const double resist_N = m.motion == Motion::kStuck ? 0.0
-                          : m.motion == Motion::kForward
-                              ? e.rolling_N + e.speed_force_N + e.grade_force_N + e.brake_N
-                              : -e.rolling_N + e.speed_force_N + e.grade_force_N - e.brake_N;
+  const double resist_N = resisting_force_N(m.motion, e.rolling_N, e.speed_force_N, e.grade_force_N, e.brake_N);
   bus.motPowDelB_W = (p_.body.mass_kg * accel_m_s2 + resist_N) * v;
   const double pow_ab_W = (e.mot.torque_Nm - p_.mot.inertia_kgm2 * e.ring_accel_rad_s2) * w_r;
   bus.motPowDelAB_W = pow_ab_W;
@@ -252,12 +246,7 @@ void PsdPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs&
   y.battery_power_W = bus.batPowDel_W;
   y.soc = bus.batSOC;
   y.locked = m.motion == Motion::kStuck ? 1.0 : 0.0;
-  unsigned f = kFaultNone;
-  if (!battery_.soc_in_window(x[kEmf])) f |= kFaultSocWindow;
-  if (!battery_.current_in_limit(e.battery.current_A)) f |= kFaultCellCurrent;
-  if (!e.battery.feasible) f |= kFaultPowerInfeasible;
-  if (!x.allFinite()) f |= kFaultNonFinite;
-  y.fault = f;
+  y.fault = battery_.faults(x[kEmf], e.battery) | (x.allFinite() ? 0u : kFaultNonFinite);
 }
 
 double PsdPlant::kinetic_energy_J(const State& x) const {

@@ -117,6 +117,16 @@ class PsdPlant {
 
  private:
   double kinetic_energy_J(const State& x) const;
+  // Road load, grade and brake forces on the moving vehicle, signed against +v (0 when stuck).
+  static double resisting_force_N(Motion motion, double rolling_N, double speed_force_N, double grade_force_N,
+                                  double brake_N) {
+    switch (motion) {
+      case Motion::kForward: return rolling_N + speed_force_N + grade_force_N + brake_N;
+      case Motion::kBackward: return -rolling_N + speed_force_N + grade_force_N - brake_N;
+      case Motion::kStuck: break;
+    }
+    return 0.0;
+  }
   void sense_from(const Eval& e, const State& x, const Modes& m, PsdBus& bus) const;
 
   PsdParams p_;
