@@ -25,6 +25,12 @@ hil::Scenario load(const char* name) {
   return sc;
 }
 
+// Counters for `steps` plant steps of 1 ms: wall time per step, and simulated / wall time.
+void set_step_counters(benchmark::State& state, double steps) {
+  state.counters["ns_per_step"] = benchmark::Counter(steps, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["realtime_factor"] = benchmark::Counter(1e-3 * steps, benchmark::Counter::kIsRate);
+}
+
 template <class Integrator>
 void BM_BevStep(benchmark::State& state) {
   const hil::Scenario sc = load("ev_nedc.toml");
@@ -43,10 +49,7 @@ void BM_BevStep(benchmark::State& state) {
     }
     benchmark::DoNotOptimize(x);
   }
-  state.counters["ns_per_step"] = benchmark::Counter(static_cast<double>(state.iterations()),
-                                                     benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
-  state.counters["realtime_factor"] =
-      benchmark::Counter(1e-3 * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  set_step_counters(state, static_cast<double>(state.iterations()));
 }
 BENCHMARK(BM_BevStep<solvers::Rk4<plant::BevPlant>>)->Name("BM_BevStep/rk4");
 BENCHMARK(BM_BevStep<solvers::ImplicitEuler<plant::BevPlant>>)->Name("BM_BevStep/implicit-euler");
@@ -62,9 +65,7 @@ void BM_BevRun(benchmark::State& state) {
     steps += runner.step_index();
     benchmark::DoNotOptimize(runner.state());
   }
-  state.counters["ns_per_step"] =
-      benchmark::Counter(static_cast<double>(steps), benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
-  state.counters["realtime_factor"] = benchmark::Counter(1e-3 * static_cast<double>(steps), benchmark::Counter::kIsRate);
+  set_step_counters(state, static_cast<double>(steps));
 }
 BENCHMARK(BM_BevRun<solvers::Rk4<plant::BevPlant>>)->Name("BM_BevRun_nedc/rk4")->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_BevRun<solvers::ImplicitEuler<plant::BevPlant>>)
@@ -96,10 +97,7 @@ void BM_Psecu2Step(benchmark::State& state) {
     }
     benchmark::DoNotOptimize(x);
   }
-  state.counters["ns_per_step"] = benchmark::Counter(static_cast<double>(state.iterations()),
-                                                     benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
-  state.counters["realtime_factor"] =
-      benchmark::Counter(1e-3 * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  set_step_counters(state, static_cast<double>(state.iterations()));
 }
 BENCHMARK(BM_Psecu2Step);
 
@@ -116,9 +114,7 @@ void BM_Psecu2Run_nedc(benchmark::State& state) {
     steps += runner.step_index();
     benchmark::DoNotOptimize(runner.state());
   }
-  state.counters["ns_per_step"] =
-      benchmark::Counter(static_cast<double>(steps), benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
-  state.counters["realtime_factor"] = benchmark::Counter(1e-3 * static_cast<double>(steps), benchmark::Counter::kIsRate);
+  set_step_counters(state, static_cast<double>(steps));
 }
 BENCHMARK(BM_Psecu2Run_nedc)->Unit(benchmark::kMillisecond);
 
