@@ -155,6 +155,7 @@ int cmd_run(const std::vector<std::string>& args) {
     if (r.exit_code != 1) std::cout << "outputs       " << out << "/timeseries.csv, " << out << "/summary.json\n";
   }
   if (r.exit_code == 1) return 1;
+  std::cout << std::flush;  // the summary before the plot tool's lines
   if (do_plot) {
     const int prc = plot(out, quiet);
     if (prc != 0 && r.exit_code == 0) return prc;
