@@ -1,0 +1,68 @@
+// Reference runs (tests/data/ref/, see its README): a rerun must match within 1e-6 relative.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "hil/config.hpp"
+#include "hil/runner.hpp"
+#include "io/csv_table.hpp"
+#include "solvers/integrators.hpp"
+#include "test_plants.hpp"
+
+namespace ehpt::hil {
+namespace {
+
+template <class Plant, class Controller = NoController>
+void compare(const Scenario& sc, const Plant& plant, const io::CsvTable& ref, Controller* controller = nullptr) {
+  // the reference's columns, in its order
+  std::vector<int> columns;
+  for (const std::string& name : ref.header) {
+    int found = -1;
+    for (std::size_t i = 0; i < plant.signals().size(); ++i) {
+      if (plant.signals()[i].name == name) found = static_cast<int>(i);
+    }
+    ASSERT_GE(found, 0) << name;
+    columns.push_back(found);
+  }
+  const double interval_s = ref.columns[0][1] - ref.columns[0][0];
+  const auto decimation = std::llround(interval_s / sc.solver.step_s);
+  Runner<Plant, solvers::Rk4<Plant>, Controller> runner(plant, sc.solver.step_s, sc.solver.steps, decimation, columns,
+                                                       sc.solver.steps, controller, sc.solver.ecu_ratio);
+  runner.run();
+  const auto rows = runner.rows();
+  ASSERT_EQ(rows.size(), ref.rows() * columns.size());
+  for (std::size_t r = 0; r < ref.rows(); ++r) {
+    for (std::size_t c = 0; c < columns.size(); ++c) {
+      const double want = ref.columns[c][r], got = rows[r * columns.size() + c];
+      ASSERT_NEAR(got, want, 1e-6 * (1.0 + std::abs(want))) << ref.header[c] << " at row " << r;
+    }
+  }
+}
+
+io::CsvTable reference(const std::string& name) {
+  io::CsvTable t;
+  std::vector<std::string> errors;
+  EXPECT_TRUE(io::read_csv_table(std::string(EHPT_TEST_DATA_DIR) + "/ref/" + name, t, errors));
+  return t;
+}
+
+TEST(ReferenceRuns, PaperPsecu2OnNedc) {
+  const Scenario sc = test::load(test::source_path("scenarios/psecu2_nedc.toml"));
+  const auto& p = std::get<plant::PsdParams>(sc.plant);
+  const plant::PsdPlant plant(p);
+  plant::PsdEcu ecu(p.ecu, p.ecu.period_s);
+  compare(sc, plant, reference("psecu2_nedc.csv"), &ecu);
+}
+
+TEST(ReferenceRuns, MapBasedEvOnNedc) {
+  const Scenario sc = test::load(test::source_path("scenarios/ev_nedc.toml"));
+  compare(sc, plant::BevPlant(std::get<plant::BevParams>(sc.plant)), reference("ev_nedc.csv"));
+}
+
+TEST(ReferenceRuns, TestMBOneFlange) {
+  const Scenario sc = test::load(test::source_path("scenarios/one_flange_test.toml"));
+  compare(sc, plant::DriveRig(std::get<plant::DriveRigParams>(sc.plant)), reference("one_flange_test.csv"));
+}
+
+}  // namespace
+}  // namespace ehpt::hil
