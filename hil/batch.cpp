@@ -127,6 +127,7 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
   j.integer("events", st.events);
   j.integer("chattering_steps", st.chattering_steps);
   j.integer("newton_failures", st.newton_failures);
+  j.integer("newton_iterations", st.newton_iterations);
   j.integer("output_decimation", sc.output.decimation);
   j.integer("rows_dropped", st.rows_dropped);
 

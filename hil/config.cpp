@@ -237,15 +237,11 @@ bool parse_override(const std::string& text, toml::table& out, Context& ctx) {
 
 // ---- CSV-backed tables ------------------------------------------------------------------
 
-bool read_table(const std::string& path, io::CsvTable& t, Context& ctx) {
-  return io::read_csv_table(path, t, ctx.errors);
-}
-
 // Cycle: time_s and speed_kmh or speed_m_s; other columns ignored.
 plant::Table1d load_cycle(const std::string& path, const std::string& field, Context& ctx) {
   io::CsvTable t;
   ctx.failed_tables.insert(field);
-  if (!read_table(path, t, ctx)) return {};
+  if (!io::read_csv_table(path, t, ctx.errors)) return {};
   const int ti = t.column_index("time_s");
   int vi = t.column_index("speed_m_s");
   double scale = 1.0;
@@ -268,7 +264,7 @@ plant::Table1d load_cycle(const std::string& path, const std::string& field, Con
 plant::Table1d load_curve(const std::string& path, const std::string& field, Context& ctx) {
   io::CsvTable t;
   ctx.failed_tables.insert(field);
-  if (!read_table(path, t, ctx)) return {};
+  if (!io::read_csv_table(path, t, ctx.errors)) return {};
   if (t.header.size() < 2) {
     ctx.errors.push_back(path + ":1: header: expected two columns (x, y)");
     return {};
@@ -282,7 +278,7 @@ plant::Table1d load_curve(const std::string& path, const std::string& field, Con
 plant::Table2d load_map(const std::string& path, const std::string& field, Context& ctx) {
   io::CsvTable t;
   ctx.failed_tables.insert(field);
-  if (!read_table(path, t, ctx)) return {};
+  if (!io::read_csv_table(path, t, ctx.errors)) return {};
   if (t.header.size() != 3) {
     ctx.errors.push_back(path + ":1: header: expected three columns (row axis, column axis, value)");
     return {};

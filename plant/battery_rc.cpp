@@ -41,7 +41,6 @@ BatteryRcConstants derive(const BatteryRcParams& p) {
   c.soc_min = p.soc_min;
   c.soc_max = p.soc_max;
   c.emf_initial_V = c.emf_min_V + p.soc_initial * (c.emf_max_V - c.emf_min_V);
-  c.strings_parallel = p.strings_parallel;
   return c;
 }
 

@@ -55,7 +55,6 @@ struct BatteryRcConstants {
   double efficiency_max = 0.0;  // eta at k = 0
   double soc_min = 0.0, soc_max = 1.0;
   double emf_initial_V = 0.0;
-  int strings_parallel = 1;
 };
 
 BatteryRcConstants derive(const BatteryRcParams& p);

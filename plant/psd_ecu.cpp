@@ -36,7 +36,6 @@ void validate(const PsdEcuParams& p, const std::string& at, Problems& problems) 
 
 PsdEcu::PsdEcu(const PsdEcuParams& params, double period_s)
     : p_(params),
-      period_s_(period_s),
       a_power_(1.0 - std::exp(-period_s / params.power_filter_s)),
       a_gen_(1.0 - std::exp(-period_s / params.gen_filter_s)) {
   if (p_.kind == PsdEcuKind::kMBecu1) p_.soc_loop_gain_W = 0.0;
@@ -57,12 +56,12 @@ void PsdEcu::update(PsdBus& bus) {
   bus.iceON = ice_on_;
   bus.icePowRef_W = ice_on_ ? p_add_W : 0.0;
   // gen holds the engine at the optimal speed for that power
-  speed_ref_rad_s_ = ice_on_ ? std::max(p_.ice_speed_min_rad_s, p_.power_to_speed_rad_s(bus.icePowRef_W))
-                             : p_.ice_off_speed_ref_rad_s;
+  const double speed_ref_rad_s = ice_on_ ? std::max(p_.ice_speed_min_rad_s, p_.power_to_speed_rad_s(bus.icePowRef_W))
+                                         : p_.ice_off_speed_ref_rad_s;
   bus.genTauRef_Nm = std::clamp(tau_gf_Nm_, -p_.gen_torque_max_Nm, p_.gen_torque_max_Nm);
   // filters, exact for inputs held over the period
   p_avg_W_ += a_power_ * (bus.motPowDelB_W - p_avg_W_);
-  tau_gf_Nm_ += a_gen_ * (p_.gen_loop_gain_Nm_s_rad * (speed_ref_rad_s_ - bus.iceW_rad_s) - tau_gf_Nm_);
+  tau_gf_Nm_ += a_gen_ * (p_.gen_loop_gain_Nm_s_rad * (speed_ref_rad_s - bus.iceW_rad_s) - tau_gf_Nm_);
 }
 
 }  // namespace ehpt::plant

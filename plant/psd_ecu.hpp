@@ -56,19 +56,14 @@ class PsdEcu {
   // Run phase: one ECU period. Reads the sensor half of the bus, writes the command half.
   void update(PsdBus& bus);
 
-  bool ice_on() const { return ice_on_; }
   double power_average_W() const { return p_avg_W_; }
-  double speed_ref_rad_s() const { return speed_ref_rad_s_; }
-  double period_s() const { return period_s_; }
 
  private:
   PsdEcuParams p_;
-  double period_s_;
   double a_power_, a_gen_;      // 1 - exp(-Ts / T)
   double p_avg_W_ = 0.0;        // P_avg(0) = 0
   double tau_gf_Nm_ = 0.0;      // tau_gf(0) = 0
   bool ice_on_ = false;         // MBecu2: iceON(0) = false
-  double speed_ref_rad_s_ = 0.0;
 };
 
 }  // namespace ehpt::plant

@@ -82,7 +82,6 @@ class Table1d {
   bool empty() const { return x_.empty(); }
   const std::vector<double>& x() const { return x_; }
   const std::vector<double>& y() const { return y_; }
-  Extrapolation extrapolation() const { return extrapolation_; }
 
  private:
   std::vector<double> x_, y_;
