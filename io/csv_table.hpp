@@ -1,8 +1,9 @@
 #pragma once
 // Numeric CSV tables with a header row, as in data/ (cycles, maps). Start-up only.
-// Blank lines and lines starting with '#' are skipped. Every problem is reported as
-// "file:line: column NAME: "text" is not a number" and reading goes on, so a user sees
-// all of them at once.
+// Blank lines and lines starting with '#' are skipped; a UTF-8 byte-order mark is ignored;
+// fields may be quoted ("1.5", as spreadsheets write them; "" is a quote inside one).
+// Every problem is reported as 'file:line: column NAME: "text" is not a number' and
+// reading goes on, so a user sees all of them at once.
 
 #include <string>
 #include <vector>
@@ -12,14 +13,21 @@ namespace ehpt::io {
 struct CsvTable {
   std::string path;
   std::vector<std::string> header;
-  std::vector<std::vector<double>> columns;  // columns[c][row]
-  std::vector<int> lines;                     // file line of each row (1-based)
+  std::vector<std::vector<double>> columns;      // columns[c][row]
+  std::vector<std::vector<std::string>> text;    // text[c][row]: the field as written (for messages)
+  std::vector<int> lines;                        // file line of each row (1-based)
+  int header_line = 1;
 
   int column_index(const std::string& name) const;  // -1 if absent
   std::size_t rows() const { return lines.size(); }
 };
 
-// Returns false and appends messages to errors when the file is missing, empty or malformed.
+// Parses CSV text read from path (path only names the file in messages). Returns false and
+// appends messages to errors when it is empty or malformed.
+bool parse_csv_table(const std::string& path, const std::string& content, CsvTable& out,
+                     std::vector<std::string>& errors);
+
+// Reads (io::read_text_file: regular files only, size bounded) and parses the file.
 bool read_csv_table(const std::string& path, CsvTable& out, std::vector<std::string>& errors);
 
 }  // namespace ehpt::io

@@ -33,14 +33,42 @@ TEST(CsvTable, ReadsHeaderColumnsAndLines) {
 }
 
 TEST(CsvTable, ReportsEveryBadFieldWithFileLineAndColumn) {
-  const std::string path = write_temp("bad.csv", "time_s,speed_kmh\n0,0\n1,\"12,5\"\n2,abc\n3\n");
+  const std::string path = write_temp("bad.csv", "time_s,speed_kmh\n0,0\n1,\"12,5\"\n2,abc\n3\n4,1,2\n5,\"7\n");
   CsvTable t;
   std::vector<std::string> errors;
   EXPECT_FALSE(read_csv_table(path, t, errors));
-  ASSERT_EQ(errors.size(), 3u);
-  EXPECT_EQ(errors[0], path + ":3: 3 fields, expected 2 as in the header");
+  ASSERT_EQ(errors.size(), 5u);
+  // a quoted field is one field: "12,5" (a decimal comma) is not a number, and is named so
+  EXPECT_EQ(errors[0], path + ":3: column speed_kmh: \"12,5\" is not a number");
   EXPECT_EQ(errors[1], path + ":4: column speed_kmh: \"abc\" is not a number");
   EXPECT_EQ(errors[2], path + ":5: 1 fields, expected 2 as in the header");
+  EXPECT_EQ(errors[3], path + ":6: 3 fields, expected 2 as in the header");
+  EXPECT_EQ(errors[4], path + ":7: a quote is opened and not closed");
+}
+
+TEST(CsvTable, QuotedFieldsAndAByteOrderMarkAreRead) {
+  // as a spreadsheet exports it: BOM, quoted header and numbers, CRLF line ends
+  const std::string path =
+      write_temp("excel.csv", "\xEF\xBB\xBF\"time_s\",\"speed_kmh\"\r\n\"0\",\"0\"\r\n\"5.39\", \"20\" \r\n");
+  CsvTable t;
+  std::vector<std::string> errors;
+  ASSERT_TRUE(read_csv_table(path, t, errors)) << errors[0];
+  EXPECT_EQ(t.header, (std::vector<std::string>{"time_s", "speed_kmh"}));
+  EXPECT_EQ(t.column_index("time_s"), 0);  // not "\xEF\xBB\xBFtime_s"
+  ASSERT_EQ(t.rows(), 2u);
+  EXPECT_EQ(t.columns[0][1], 5.39);
+  EXPECT_EQ(t.columns[1][1], 20.0);
+  EXPECT_EQ(t.text[1][1], "20");
+}
+
+TEST(CsvTable, ListsTheFirstTwentyProblemsOfAFileAndCountsTheRest) {
+  std::string garbage = "a,b\n";
+  for (int i = 0; i < 1000; ++i) garbage += "x,y\n";
+  CsvTable t;
+  std::vector<std::string> errors;
+  EXPECT_FALSE(read_csv_table(write_temp("garbage.csv", garbage), t, errors));
+  ASSERT_EQ(errors.size(), 21u);
+  EXPECT_NE(errors.back().find("1980 more problems in this file"), std::string::npos) << errors.back();
 }
 
 TEST(CsvTable, EmptyAndMissingFiles) {
@@ -52,7 +80,7 @@ TEST(CsvTable, EmptyAndMissingFiles) {
   ASSERT_EQ(errors.size(), 3u);
   EXPECT_NE(errors[0].find("empty file"), std::string::npos);
   EXPECT_NE(errors[1].find("no data rows"), std::string::npos);
-  EXPECT_NE(errors[2].find("/nonexistent/x.csv: cannot open"), std::string::npos);
+  EXPECT_EQ(errors[2], "/nonexistent/x.csv: cannot read: no such file");
 }
 
 TEST(NumberFormat, ShortestRoundTripAndStrictParse) {

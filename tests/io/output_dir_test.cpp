@@ -2,49 +2,186 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <new>
+#include <string>
+#include <vector>
 
 namespace fs = std::filesystem;
 
 namespace ehpt::io {
 namespace {
 
-TEST(OutputDir, WritesUnderPartialAndRenamesOnCommit) {
-  const fs::path root = fs::temp_directory_path() / "ehpt_outdir_test";
+// A fresh scratch folder per test.
+fs::path scratch(const std::string& name) {
+  const fs::path root = fs::temp_directory_path() / ("ehpt_outdir_" + name);
   fs::remove_all(root);
-  const std::string final_dir = (root / "run").string();
-  // an older complete run is replaced only at commit
-  fs::create_directories(final_dir);
-  std::ofstream(final_dir + "/summary.json") << "{}";
-  std::ofstream(final_dir + "/old.txt") << "old";
-  OutputDir dir;
-  std::string error;
-  ASSERT_TRUE(dir.open(final_dir, error)) << error;
-  ASSERT_TRUE(write_file_atomically(dir.file("summary.json"), "{}\n", error)) << error;
-  EXPECT_TRUE(fs::exists(final_dir + ".partial/summary.json"));
-  EXPECT_TRUE(fs::exists(final_dir + "/old.txt"));
-  ASSERT_TRUE(dir.commit(error)) << error;
-  EXPECT_TRUE(fs::exists(final_dir + "/summary.json"));
-  EXPECT_FALSE(fs::exists(final_dir + "/old.txt"));
-  EXPECT_FALSE(fs::exists(final_dir + ".partial"));
-  EXPECT_FALSE(fs::exists(final_dir + ".replaced"));
+  fs::create_directories(root);
+  return root;
 }
 
-TEST(OutputDir, RefusesToReplaceAFolderThatIsNotAnEarlierRun) {
-  const fs::path root = fs::temp_directory_path() / "ehpt_outdir_refuse";
-  fs::remove_all(root);
-  fs::create_directories(root / "notes");
-  std::ofstream(root / "notes" / "notes.txt") << "mine";
-  OutputDir dir;
+void write(const fs::path& p, const std::string& text) {
+  fs::create_directories(p.parent_path());
+  std::ofstream(p) << text;
+}
+
+std::string read(const fs::path& p) {
+  std::ifstream in(p);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// A complete run into dir with the given files.
+void run_into(const std::string& dir, const std::vector<std::pair<std::string, std::string>>& files) {
+  OutputDir out;
   std::string error;
-  EXPECT_FALSE(dir.open((root / "notes").string(), error));
-  EXPECT_NE(error.find("is not an ehpt output folder"), std::string::npos) << error;
-  EXPECT_TRUE(fs::exists(root / "notes" / "notes.txt"));
-  EXPECT_FALSE(fs::exists(root / "notes.partial"));
+  ASSERT_TRUE(out.open(dir, error)) << error;
+  for (const auto& [name, text] : files) ASSERT_TRUE(write_file_atomically(out.file(name), text, error)) << error;
+  ASSERT_TRUE(out.commit(error)) << error;
+}
+
+TEST(OutputDir, WritesIntoAPrivateFolderAndCommitsWithAManifest) {
+  const fs::path root = scratch("commit");
+  const std::string dir = (root / "run").string();
+  OutputDir out;
+  std::string error;
+  ASSERT_TRUE(out.open(dir, error)) << error;
+  EXPECT_EQ(out.partial_dir(), dir + ".partial-" + std::to_string(::getpid()));
+  EXPECT_TRUE(fs::exists(dir + ".ehpt-lock"));
+  ASSERT_TRUE(write_file_atomically(out.file("summary.json"), "{}\n", error)) << error;
+  EXPECT_FALSE(fs::exists(dir));
+  ASSERT_TRUE(out.commit(error)) << error;
+  EXPECT_EQ(read(dir + "/summary.json"), "{}\n");
+  EXPECT_EQ(read(dir + "/ehpt-manifest.txt"), std::string(kManifestMagic) + "\nsummary.json\n");
+  EXPECT_FALSE(fs::exists(out.partial_dir()));
+  EXPECT_FALSE(fs::exists(dir + ".ehpt-lock"));  // ours, removed
+  EXPECT_EQ(std::distance(fs::directory_iterator(root), fs::directory_iterator()), 1);  // only run/
+}
+
+TEST(OutputDir, ReplacesAnEarlierRunDeletingOnlyTheFilesItsManifestLists) {
+  const fs::path root = scratch("replace");
+  const std::string dir = (root / "run").string();
+  run_into(dir, {{"summary.json", "old"}, {"timeseries.csv", "old"}, {"speed.png", "old"}});
+  run_into(dir, {{"summary.json", "new"}});
+  EXPECT_EQ(read(dir + "/summary.json"), "new");
+  EXPECT_FALSE(fs::exists(dir + "/timeseries.csv"));
+  EXPECT_FALSE(fs::exists(dir + "/speed.png"));
+  EXPECT_EQ(std::distance(fs::directory_iterator(root), fs::directory_iterator()), 1);
+}
+
+TEST(OutputDir, NeverReplacesAFolderOfSomeoneElsesFiles) {
+  const fs::path root = scratch("foreign");
+  std::string error;
+  // the review's case: a project folder that happens to hold a summary.json
+  const fs::path project = root / "project";
+  write(project / "src/main.c", "int main() {}");
+  write(project / "README.txt", "mine");
+  write(project / "summary.json", "{}");
+  OutputDir a;
+  EXPECT_FALSE(a.open(project.string(), error));
+  EXPECT_NE(error.find("is not an earlier ehpt run"), std::string::npos) << error;
+  // an earlier run to which the user added a file is not replaced either
+  const std::string run = (root / "run").string();
+  run_into(run, {{"summary.json", "old"}});
+  write(fs::path(run) / "notes.txt", "my notes");
+  OutputDir b;
+  EXPECT_FALSE(b.open(run, error));
+  EXPECT_NE(error.find("it holds files ehpt did not write: notes.txt"), std::string::npos) << error;
+  // a manifest that is not ehpt's does not count
+  const fs::path fake = root / "fake";
+  write(fake / "ehpt-manifest.txt", "summary.json\n");
+  write(fake / "summary.json", "{}");
+  OutputDir c;
+  EXPECT_FALSE(c.open(fake.string(), error));
+  // a symbolic link is refused, not followed
+  fs::create_directory_symlink(project, root / "link");
+  OutputDir d;
+  EXPECT_FALSE(d.open((root / "link").string(), error));
+  EXPECT_NE(error.find("symbolic link"), std::string::npos) << error;
+  // everything is as it was, and no folder of ours was left
+  EXPECT_EQ(read(project / "src/main.c"), "int main() {}");
+  EXPECT_EQ(read(project / "README.txt"), "mine");
+  EXPECT_EQ(read(fs::path(run) / "notes.txt"), "my notes");
+  EXPECT_EQ(read(fake / "summary.json"), "{}");
+  for (const auto& e : fs::directory_iterator(root)) {
+    EXPECT_EQ(e.path().filename().string().find(".partial"), std::string::npos) << e.path();
+    EXPECT_EQ(e.path().filename().string().find(".ehpt-lock"), std::string::npos) << e.path();
+  }
+  // an empty folder is used
   fs::create_directories(root / "empty");
-  EXPECT_TRUE(dir.open((root / "empty").string(), error)) << error;
+  run_into((root / "empty").string(), {{"summary.json", "x"}});
+  EXPECT_EQ(read(root / "empty/summary.json"), "x");
+}
+
+TEST(OutputDir, NeverTouchesTheUsersPartialOrReplacedPaths) {
+  const fs::path root = scratch("user_paths");
+  const std::string dir = (root / "run").string();
+  write(dir + ".partial/keep.txt", "a folder of mine");
+  write(dir + ".replaced", "a file of mine");
+  run_into(dir, {{"summary.json", "1"}});
+  run_into(dir, {{"summary.json", "2"}});  // replaces the first run
+  EXPECT_EQ(read(dir + ".partial/keep.txt"), "a folder of mine");
+  EXPECT_EQ(read(dir + ".replaced"), "a file of mine");
+  EXPECT_EQ(read(dir + "/summary.json"), "2");
+}
+
+TEST(OutputDir, ASecondRunOnTheSameFolderStopsAtOnce) {
+  const fs::path root = scratch("lock");
+  const std::string dir = (root / "run").string();
+  std::string error;
+  OutputDir first;
+  ASSERT_TRUE(first.open(dir, error)) << error;
+  ASSERT_TRUE(write_file_atomically(first.file("summary.json"), "first", error));
+  OutputDir second;
+  EXPECT_FALSE(second.open(dir, error));
+  EXPECT_NE(error.find("another ehpt run is writing this folder"), std::string::npos) << error;
+  ASSERT_TRUE(first.commit(error)) << error;
+  EXPECT_EQ(read(dir + "/summary.json"), "first");
+  // once the first has committed, the folder is an earlier run and may be replaced
+  OutputDir third;
+  EXPECT_TRUE(third.open(dir, error)) << "[" << error << "]";
+}
+
+TEST(OutputDir, AnExceptionRemovesTheFolderItMadeAReturnKeepsIt) {
+  const fs::path root = scratch("unwind");
+  std::string kept;
+  {
+    OutputDir out;
+    std::string error;
+    ASSERT_TRUE(out.open((root / "a").string(), error));
+    ASSERT_TRUE(write_file_atomically(out.file("timeseries.csv"), "t\n", error));
+    kept = out.partial_dir();
+  }
+  EXPECT_TRUE(fs::exists(kept + "/timeseries.csv"));  // like a crash: the data so far is kept
+  std::string removed;
+  try {
+    OutputDir out;
+    std::string error;
+    ASSERT_TRUE(out.open((root / "b").string(), error));
+    removed = out.partial_dir();
+    throw std::bad_alloc();
+  } catch (const std::bad_alloc&) {
+  }
+  EXPECT_FALSE(removed.empty());
+  EXPECT_FALSE(fs::exists(removed));
+  EXPECT_FALSE(fs::exists(root / "b.ehpt-lock"));
+}
+
+TEST(OutputDir, ManifestGrowsWithLaterFigures) {
+  const fs::path root = scratch("manifest");
+  const std::string dir = (root / "run").string();
+  run_into(dir, {{"summary.json", "x"}});
+  std::string error;
+  ASSERT_TRUE(add_to_manifest(dir, {"speed.png"}, error)) << error;
+  write(fs::path(dir) / "speed.png", "png");
+  std::vector<std::string> files;
+  std::string why;
+  ASSERT_TRUE(is_earlier_run(dir, files, why)) << why;
+  EXPECT_EQ(files, (std::vector<std::string>{"speed.png", "summary.json"}));
+  EXPECT_FALSE(add_to_manifest(dir, {"../escape"}, error));
 }
 
 TEST(JsonObject, OrderedKeysExactNumbersNullForNan) {

@@ -1,0 +1,14 @@
+#pragma once
+// Starting a helper program (the plot tool) without a shell: the arguments go to the program
+// as a vector, so no character in a path can be taken as a command.
+
+#include <string>
+#include <vector>
+
+namespace ehpt::io {
+
+// Runs argv[0] (an absolute path) with argv, waits for it. Returns its exit status (0..255),
+// 128 + N when it was killed by signal N, or -1 when it could not start (reason set).
+int run_program(const std::vector<std::string>& argv, std::string& reason);
+
+}  // namespace ehpt::io
