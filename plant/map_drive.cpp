@@ -13,9 +13,10 @@ void validate(const MapDriveParams& p, const std::string& at, Problems& problems
   problems.require_in(at + ".limit_ramp_fraction", p.limit_ramp_fraction, 0.0, 1.0, true, false);
   if (p.loss_model == DriveLossModel::kMap) {
     validate(p.efficiency_map, at + ".efficiency_map", problems);
-    for (double eta : p.efficiency_map.values()) {
-      if (!(eta > 0.0 && eta <= 1.0)) {
-        problems.add(at + ".efficiency_map", number_text(eta), "efficiency must be in (0, 1]");
+    const auto& eta = p.efficiency_map.values();
+    for (std::size_t k = 0; k < eta.size(); ++k) {
+      if (!(eta[k] > 0.0 && eta[k] <= 1.0)) {
+        problems.add_cell(at + ".efficiency_map", k, 2, number_text(eta[k]), "efficiency must be in (0, 1]");
         break;
       }
     }

@@ -9,16 +9,18 @@ void validate(const MapIceParams& p, const std::string& at, Problems& problems) 
   problems.require_positive(at + ".fuel_lhv_J_kg", p.fuel_lhv_J_kg);
   problems.require_positive(at + ".fuel_density_kg_m3", p.fuel_density_kg_m3);
   validate(p.torque_max_Nm, at + ".torque_max", false, problems);
-  for (double t : p.torque_max_Nm.y()) {
-    if (!(t >= 0.0)) {
-      problems.add(at + ".torque_max", number_text(t), "maximum torque must be >= 0");
+  const auto& tau = p.torque_max_Nm.y();
+  for (std::size_t i = 0; i < tau.size(); ++i) {
+    if (!(tau[i] >= 0.0)) {
+      problems.add_cell(at + ".torque_max", i, 1, number_text(tau[i]), "maximum torque must be >= 0");
       break;
     }
   }
   validate(p.sfc_g_kWh, at + ".sfc_map", problems);
-  for (double s : p.sfc_g_kWh.values()) {
-    if (!(s > 0.0)) {
-      problems.add(at + ".sfc_map", number_text(s), "specific consumption must be > 0 g/kWh");
+  const auto& sfc = p.sfc_g_kWh.values();
+  for (std::size_t k = 0; k < sfc.size(); ++k) {
+    if (!(sfc[k] > 0.0)) {
+      problems.add_cell(at + ".sfc_map", k, 2, number_text(sfc[k]), "specific consumption must be > 0 g/kWh");
       break;
     }
   }

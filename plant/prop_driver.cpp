@@ -4,13 +4,15 @@ namespace ehpt::plant {
 
 void validate(const PropDriverParams& p, const std::string& at, Problems& problems) {
   validate(p.cycle_m_s, at + ".cycle", true, problems);
-  for (double v : p.cycle_m_s.y()) {
-    if (!(v >= 0.0 && v < 200.0)) {
-      problems.add(at + ".cycle", number_text(v), "speeds must be in [0, 200) m/s");
+  const auto& v = p.cycle_m_s.y();
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    if (!(v[i] >= 0.0 && v[i] < 200.0)) {
+      problems.add_cell(at + ".cycle", i, 1, number_text(v[i]), "speed must be >= 0 and below 200 m/s (720 km/h)");
       break;
     }
   }
-  problems.require_positive(at + ".gain", p.gain);
+  // gain 0 is a coasting car (no request): useful to check a plant against closed forms
+  problems.require_non_negative(at + ".gain", p.gain);
   problems.require_positive(at + ".request_max", p.request_max);
   if (!(p.request_min <= 0.0)) problems.add(at + ".request_min", number_text(p.request_min), "must be <= 0");
 }

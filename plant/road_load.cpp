@@ -15,9 +15,10 @@ void validate(const RoadLoadParams& p, const std::string& at, Problems& problems
   }
   if (!p.slope_rad.empty()) {
     validate(p.slope_rad, at + ".slope", false, problems);
-    for (double a : p.slope_rad.y()) {
-      if (!(a > -1.5 && a < 1.5)) {
-        problems.add(at + ".slope", number_text(a), "angle must be in (-1.5, 1.5) rad");
+    const auto& angle = p.slope_rad.y();
+    for (std::size_t i = 0; i < angle.size(); ++i) {
+      if (!(angle[i] > -1.5 && angle[i] < 1.5)) {
+        problems.add_cell(at + ".slope", i, 1, number_text(angle[i]), "angle must be in (-1.5, 1.5) rad");
         break;
       }
     }

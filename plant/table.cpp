@@ -48,14 +48,14 @@ void validate(const Table1d& t, const std::string& field, bool allow_repeats, Pr
   }
   for (std::size_t i = 0; i < x.size(); ++i) {
     if (!std::isfinite(x[i]) || !std::isfinite(y[i])) {
-      problems.add(field + "[" + std::to_string(i) + "]",
-                   number_text(x[i]) + ", " + number_text(y[i]), "must be finite numbers");
+      const int column = std::isfinite(x[i]) ? 1 : 0;
+      problems.add_cell(field, i, column, number_text(column == 0 ? x[i] : y[i]), "must be a finite number");
       return;
     }
     if (i > 0) {
       const bool ok = allow_repeats ? x[i] >= x[i - 1] : x[i] > x[i - 1];
       if (!ok) {
-        problems.add(field + "[" + std::to_string(i) + "]", number_text(x[i]),
+        problems.add_cell(field, i, 0, number_text(x[i]),
                      std::string("axis must be ") + (allow_repeats ? "non-decreasing" : "strictly increasing") +
                          " (previous value " + number_text(x[i - 1]) + ")");
         return;
@@ -69,31 +69,34 @@ Table2d::Table2d(std::vector<double> u1, std::vector<double> u2, std::vector<dou
     : u1_(std::move(u1)), u2_(std::move(u2)), v_(std::move(values)), n2_(u2_.size()), index1_(u1_), index2_(u2_) {}
 
 void validate(const Table2d& t, const std::string& field, Problems& problems) {
-  const auto check_axis = [&](const std::vector<double>& ax, const char* name) {
+  // a row-axis value first appears in table row i * n2, a column-axis value in row j
+  const std::size_t n2 = t.u2().size();
+  const auto check_axis = [&](const std::vector<double>& ax, int column, std::size_t row_stride, const char* name) {
     if (ax.size() < 2) {
-      problems.add(field + "." + name, std::to_string(ax.size()) + " grid values", "needs at least 2");
+      problems.add(field, std::to_string(ax.size()) + (ax.size() == 1 ? " value" : " values") + " on the " + name,
+                   "a map needs at least 2 values on each axis");
       return false;
     }
     for (std::size_t i = 0; i < ax.size(); ++i) {
       if (!std::isfinite(ax[i]) || (i > 0 && !(ax[i] > ax[i - 1]))) {
-        problems.add(field + "." + name + "[" + std::to_string(i) + "]", number_text(ax[i]),
-                     "axis must be finite and strictly increasing");
+        problems.add_cell(field, i * row_stride, column, number_text(ax[i]),
+                          std::string(name) + " must be finite and strictly increasing");
         return false;
       }
     }
     return true;
   };
-  const bool ok1 = check_axis(t.u1(), "row_axis");
-  const bool ok2 = check_axis(t.u2(), "column_axis");
+  const bool ok1 = check_axis(t.u1(), 0, n2, "row axis");
+  const bool ok2 = check_axis(t.u2(), 1, 1, "column axis");
   if (!ok1 || !ok2) return;
   if (t.values().size() != t.u1().size() * t.u2().size()) {
     problems.add(field, std::to_string(t.values().size()) + " values",
                  "grid needs " + std::to_string(t.u1().size() * t.u2().size()) + " values (every row x column)");
     return;
   }
-  for (double v : t.values()) {
-    if (!std::isfinite(v)) {
-      problems.add(field, number_text(v), "values must be finite");
+  for (std::size_t k = 0; k < t.values().size(); ++k) {
+    if (!std::isfinite(t.values()[k])) {
+      problems.add_cell(field, k, 2, number_text(t.values()[k]), "must be a finite number");
       return;
     }
   }

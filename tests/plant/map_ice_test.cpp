@@ -58,8 +58,12 @@ TEST(MapIce, ValidateRejectsNegativeSfcAndBadCurves) {
   Problems problems;
   validate(p, "ice", problems);
   ASSERT_EQ(problems.size(), 2u);
-  EXPECT_EQ(problems.list()[0].field, "ice.torque_max[2]");
+  EXPECT_EQ(problems.list()[0].field, "ice.torque_max");
+  EXPECT_EQ(problems.list()[0].row, 2);
   EXPECT_EQ(problems.list()[1].field, "ice.sfc_map");
+  EXPECT_EQ(problems.list()[1].row, 1);     // the second grid point in file order
+  EXPECT_EQ(problems.list()[1].column, 2);  // the value column
+  EXPECT_EQ(problems.list()[1].value, "-1");
 }
 
 // §11.4 rigs: ICE + load inertia + quadratic load -80 (w/100)^2 N m; the request is a

@@ -53,11 +53,16 @@ TEST(Table1d, ValidateNamesRowAndProblem) {
   Problems p;
   validate(Table1d({0.0, 2.0, 1.0}, {0.0, 0.0, 0.0}, Extrapolation::kHold), "driver.cycle", true, p);
   ASSERT_EQ(p.size(), 1u);
-  EXPECT_EQ(p.list()[0].field, "driver.cycle[2]");
+  EXPECT_EQ(p.list()[0].field, "driver.cycle");
+  EXPECT_EQ(p.list()[0].row, 2);
+  EXPECT_EQ(p.list()[0].column, 0);  // the axis
   EXPECT_EQ(p.list()[0].value, "1");
   Problems q;
   validate(Table1d({0.0, 1.0}, {0.0, std::nan("")}, Extrapolation::kHold), "road.slope", false, q);
-  EXPECT_EQ(q.size(), 1u);
+  ASSERT_EQ(q.size(), 1u);
+  EXPECT_EQ(q.list()[0].row, 1);
+  EXPECT_EQ(q.list()[0].column, 1);  // the values
+  EXPECT_EQ(q.list()[0].value, "nan");
   Problems r;
   validate(Table1d({0.0}, {0.0}, Extrapolation::kHold), "x", false, r);
   EXPECT_EQ(r.size(), 1u);
