@@ -2,12 +2,14 @@
 
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
-#include <fstream>
 #include <ostream>
 
 #include "hil/runner.hpp"
 #include "io/number_format.hpp"
+#include "io/text_file.hpp"
+#include "plant/battery_rig.hpp"
 #include "plant/bev_plant.hpp"
 #include "plant/drive_rigs.hpp"
 #include "plant/psd_plant.hpp"
@@ -30,6 +32,15 @@ std::string fault_text(unsigned fault) {
 namespace {
 
 constexpr std::int64_t kChunkSteps = 50000;
+
+std::string signal_name(int sig) {
+  switch (sig) {
+    case SIGINT: return "SIGINT";
+    case SIGTERM: return "SIGTERM";
+    case SIGHUP: return "SIGHUP";
+    default: return "signal " + std::to_string(sig);
+  }
+}
 
 template <class Plant, class Integrator, class Controller = NoController>
 BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions& opt, std::ostream& log,
@@ -54,8 +65,13 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
     res.exit_code = 1;
     return res;
   }
-  const std::string csv_path = dir.file("timeseries.csv");
-  std::ofstream csv(csv_path, std::ios::binary);
+  io::TextFileWriter csv;
+  std::string csv_error;  // the first write error; the run goes on, the outputs are not committed
+  if (!csv.open(dir.file("timeseries.csv"), csv_error)) {
+    log << "error: " << csv_error << "\n";
+    res.exit_code = 1;
+    return res;
+  }
   std::string text;
   for (std::size_t c = 0; c < columns.size(); ++c) {
     text += (c ? "," : "") + std::string(signals[static_cast<std::size_t>(columns[c])].name);
@@ -67,10 +83,10 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
   typename Plant::Outputs y0 = runner.last_outputs();
   const auto wall_start = std::chrono::steady_clock::now();
   double run_wall_s = 0.0;
-  bool interrupted = false;
+  int interrupted_by = 0;  // signal number
   for (;;) {
     const auto t0 = std::chrono::steady_clock::now();
-    runner.run(opt.stop);
+    runner.run(opt.stop_signal);
     run_wall_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     // between chunks: write rows and report progress
     const auto rows = runner.rows();
@@ -79,7 +95,7 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
       text += (i + 1) % columns.size() == 0 ? '\n' : ',';
     }
     runner.clear_rows();
-    csv << text;
+    if (csv_error.empty()) csv.write(text, csv_error);
     text.clear();
     if (opt.progress) {
       char buf[96];
@@ -88,13 +104,13 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
       log << buf << std::flush;
     }
     if (runner.finished()) break;
-    if (opt.stop != nullptr && opt.stop->load()) {
-      interrupted = true;
+    if (opt.stop_signal != nullptr && opt.stop_signal->load() != 0) {
+      interrupted_by = opt.stop_signal->load();
       break;
     }
   }
   if (opt.progress) log << "\n";
-  csv.flush();
+  if (csv_error.empty()) csv.close(csv_error);
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
 
   const RunStats& st = runner.stats();
@@ -107,9 +123,23 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
   if (st.fault != 0) {
     status = "fault";
     res.exit_code = 3;
-  } else if (interrupted) {
+  } else if (interrupted_by != 0) {
     status = "interrupted";
-    res.exit_code = 130;
+    res.exit_code = 128 + interrupted_by;  // the shell's convention: 130 SIGINT, 143 SIGTERM, 129 SIGHUP
+  }
+  const double relative = std::abs(audit.residual_J) / std::max(audit.scale_J, 1.0);
+  const bool audit_closes = relative <= kAuditWarnRelative;
+  if (!audit_closes) {
+    std::string causes;
+    if (st.newton_failures > 0) causes += std::to_string(st.newton_failures) + " implicit-Euler steps did not converge; ";
+    if (st.chattering_steps > 0) causes += std::to_string(st.chattering_steps) + " steps hit the event cap (chattering); ";
+    causes += "the step may be too coarse for the dynamics (solver.step_s = " + io::number_text(sc.solver.step_s) +
+              " s; the shipped scenarios use 0.001 s)";
+    char rel[32];
+    std::snprintf(rel, sizeof rel, "%.3g", relative);
+    res.warnings.push_back(std::string("the energy audit does not close: relative residual ") + rel + " > " +
+                           io::number_text(kAuditWarnRelative) + ". Likely causes: " + causes +
+                           ". Treat the results with care.");
   }
   j.text("status", status);
   if (st.fault != 0) {
@@ -118,6 +148,7 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
   }
   j.text("scenario", sc.name);
   j.text("description", sc.description);
+  if (interrupted_by != 0) j.text("interrupted_by", signal_name(interrupted_by));
   j.text("vehicle_file", sc.vehicle_path);
   j.text("cycle_file", sc.cycle_path);
   j.text("solver", solver_name(sc.solver.kind));
@@ -164,9 +195,9 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
     j.number("ice_on_time_s", st.ice_on_time_s);
     j.integer("ice_starts", st.ice_starts);
   }
-  const double relative = std::abs(audit.residual_J) / std::max(audit.scale_J, 1.0);
   j.number("energy_balance_residual_J", audit.residual_J);
   j.number("energy_balance_relative", relative);
+  j.boolean("energy_balance_ok", audit_closes);
   io::JsonObject terms;
   for (const auto& [k, v] : audit.terms) terms.number(k, v);
   j.object("energy_audit", terms);
@@ -205,18 +236,29 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
                 wall_s);
   s += buf;
   if (st.fault != 0) s += "FAULT         " + fault_text(st.fault) + " at t = " + io::number_text(st.fault_time_s) + " s\n";
-  if (interrupted) s += "INTERRUPTED   at t = " + io::number_text(sim_s) + " s; outputs so far kept\n";
+  if (interrupted_by != 0) s += "INTERRUPTED   at t = " + io::number_text(sim_s) + " s; outputs so far kept\n";
+  j.strings("warnings", [&] {
+    std::vector<std::string> all = sc.warnings;
+    all.insert(all.end(), res.warnings.begin(), res.warnings.end());
+    return all;
+  }());
 
-  if (!csv) {
-    log << "error: " << csv_path << ": write failed\n";
+  if (!csv_error.empty()) {
+    log << "error: " << csv_error << " (the run's files are in " << dir.partial_dir() << ")\n";
     res.exit_code = 1;
     return res;
   }
-  csv.close();
-  if (!io::write_file_atomically(dir.file("summary.json"), j.str() + "\n", error) || !dir.commit(error)) {
+  if (!io::write_file_atomically(dir.file("summary.json"), j.str() + "\n", error)) {
+    log << "error: " << error << " (the run's files are in " << dir.partial_dir() << ")\n";
+    res.exit_code = 1;
+    return res;
+  }
+  if (opt.before_commit && !opt.before_commit(dir.partial_dir())) res.after_failed = true;
+  if (!dir.commit(error)) {
     log << "error: " << error << "\n";
     res.exit_code = 1;
   }
+  for (const std::string& w : dir.warnings()) res.warnings.push_back(w);
   return res;
 }
 
@@ -240,6 +282,10 @@ BatchResult run_batch(const Scenario& sc, const BatchOptions& opt, std::ostream&
     const plant::PsdPlant plant(*p);
     plant::PsdEcu ecu(p->ecu, p->ecu.period_s);
     return run_with_solver(sc, plant, opt, log, &ecu);
+  }
+  if (const auto* p = std::get_if<plant::BatteryRigParams>(&sc.plant)) {
+    const plant::BatteryRig plant(*p);
+    return run_with_solver(sc, plant, opt, log);
   }
   const plant::DriveRig plant(std::get<plant::DriveRigParams>(sc.plant));
   return run_with_solver(sc, plant, opt, log);

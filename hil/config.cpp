@@ -1,5 +1,6 @@
 #include "hil/config.hpp"
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -11,6 +12,7 @@
 
 #include "io/csv_table.hpp"
 #include "io/number_format.hpp"
+#include "io/text_file.hpp"
 
 namespace fs = std::filesystem;
 
@@ -37,12 +39,31 @@ std::string location(const toml::node* n, const std::string& fallback) {
   return p + ":" + std::to_string(n->source().begin.line);
 }
 
+// A table loaded from CSV, kept so that a problem plant/ finds in a cell can be reported
+// with the file line, the CSV column and the value as written (before unit conversion).
+struct TableSource {
+  std::string path;
+  std::vector<int> lines;                       // file line of each table row
+  std::vector<std::string> columns;             // table column (0 axis, 1, 2) -> CSV header name
+  std::vector<std::vector<std::string>> text;   // table column -> the fields as written
+};
+
+// A file named by a key: where the key is, the path as written, and the path resolved.
+struct FileRef {
+  std::string path;     // relative to the folder of the file that named it
+  std::string written;  // as in the file
+  std::string where;    // "file:line" of the key
+  std::string field;    // dotted key
+  bool empty() const { return path.empty(); }
+};
+
 // Collects messages and remembers where each field's value came from, so that problems
 // found later by plant/ validate() can be given a file and line.
 struct Context {
   std::vector<std::string> errors;
-  std::map<std::string, std::string> where;                // field -> "file:line"
-  std::map<std::string, std::pair<std::string, std::vector<int>>> tables;  // field -> csv, row lines
+  std::vector<std::string> warnings;
+  std::map<std::string, std::string> where;    // field -> "file:line"
+  std::map<std::string, TableSource> tables;   // field -> its CSV
   std::set<std::string> failed_tables;  // fields whose file could not be read: no follow-on problems
 
   std::set<std::string> reported;  // fields with a problem already: validate() need not repeat it
@@ -51,6 +72,13 @@ struct Context {
              const std::string& expected) {
     errors.push_back(loc + ": " + field + (value.empty() ? "" : " = " + value) + ": " + expected);
     reported.insert(field);
+  }
+  void warn(const std::string& loc, const std::string& field, const std::string& value, const std::string& why) {
+    warnings.push_back(loc + ": " + field + (value.empty() ? "" : " = " + value) + ": " + why);
+  }
+  // A file named by ref cannot be read: say so at the key that names it.
+  void unreadable(const FileRef& ref, const std::string& reason) {
+    error(ref.where, ref.field, "\"" + ref.written + "\"", "cannot read " + ref.path + ": " + reason);
   }
 };
 
@@ -105,6 +133,17 @@ class Reader {
     ctx_.error(location(n, file_), field(key), node_text(*n), "must be a whole number");
     return fallback;
   }
+  // A whole number in [lo, hi], checked before it is narrowed, so that 2^32 + 100 is
+  // reported as written instead of running as 100.
+  int small_integer(std::string_view key, int fallback, int lo, int hi) {
+    const toml::node* n = find(key);
+    if (n == nullptr) return fallback;
+    const auto v = n->value_exact<std::int64_t>();
+    if (v && *v >= lo && *v <= hi) return static_cast<int>(*v);
+    ctx_.error(location(n, file_), field(key), node_text(*n),
+               "must be a whole number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    return fallback;
+  }
   bool flag(std::string_view key, bool fallback) {
     const toml::node* n = find(key);
     if (n == nullptr) return fallback;
@@ -119,23 +158,23 @@ class Reader {
     ctx_.error(location(n, file_), field(key), node_text(*n), "must be a string");
     return fallback;
   }
-  // A file name, relative to the folder of the file that gave it.
-  std::string path(std::string_view key, bool required) {
+  // A file name, relative to the folder of the file that gave it (--set: the current folder).
+  FileRef path(std::string_view key, bool required) {
     const toml::node* n = find(key);
     if (n == nullptr) {
       if (required) ctx_.error(file_, field(key), "", "missing (required file name)");
-      return "";
+      return {};
     }
     auto v = n->value_exact<std::string>();
-    if (!v) {
-      ctx_.error(location(n, file_), field(key), node_text(*n), "must be a file name (string)");
-      return "";
+    if (!v || v->empty()) {
+      ctx_.error(location(n, file_), field(key), node_text(*n), "must be a file name (a non-empty string)");
+      return {};
     }
     fs::path p(*v);
     if (p.is_relative() && n->source().path && n->source().path->rfind("--set", 0) != 0) {
       p = fs::path(*n->source().path).parent_path() / p;
     }
-    return p.lexically_normal().string();
+    return {p.lexically_normal().string(), *v, location(n, file_), field(key)};
   }
   std::vector<std::string> strings(std::string_view key) {
     std::vector<std::string> out;
@@ -151,6 +190,29 @@ class Reader {
         out.push_back(*s);
       } else {
         ctx_.error(location(&e, file_), field(key), node_text(e), "must be a string");
+      }
+    }
+    return out;
+  }
+
+  // An array of tables ([[key]] ... in TOML): one reader each, named key[0], key[1], ...
+  // The highest layer that gives the array gives all of it.
+  std::vector<Reader> table_array(std::string_view key) {
+    std::vector<Reader> out;
+    const toml::node* n = find(key);
+    if (n == nullptr) return out;
+    const toml::array* a = n->as_array();
+    if (a == nullptr) {
+      ctx_.error(location(n, file_), field(key), node_text(*n), "must be an array of tables ([[" + field(key) + "]])");
+      return out;
+    }
+    for (std::size_t i = 0; i < a->size(); ++i) {
+      const toml::node& e = *a->get(i);
+      const std::string name = field(key) + "[" + std::to_string(i) + "]";
+      if (const toml::table* t = e.as_table()) {
+        out.emplace_back(std::vector<const toml::table*>{t}, name, file_, ctx_);
+      } else {
+        ctx_.error(location(&e, file_), name, node_text(e), "must be a table");
       }
     }
     return out;
@@ -189,16 +251,25 @@ class Reader {
   std::set<std::string> used_;
 };
 
-bool parse_toml(const std::string& path, toml::table& out, Context& ctx) {
+// ref: the key that names the file (the vehicle file), so that a missing file is reported
+// there; nullptr for the scenario itself.
+bool parse_toml(const std::string& path, toml::table& out, Context& ctx, const FileRef* ref = nullptr) {
+  std::string content, reason;
+  if (!io::read_text_file(path, content, reason)) {
+    if (ref != nullptr) {
+      ctx.unreadable(*ref, reason);
+    } else {
+      ctx.errors.push_back(path + ": cannot read: " + reason);
+    }
+    return false;
+  }
   try {
-    out = toml::parse_file(path);
+    out = toml::parse(content, path);
     return true;
   } catch (const toml::parse_error& e) {
     const auto& src = e.source();
     ctx.errors.push_back(path + ":" + std::to_string(src.begin.line) + ": TOML syntax: " +
                          std::string(e.description()));
-  } catch (const std::exception& e) {
-    ctx.errors.push_back(path + ": cannot read: " + e.what());
   }
   return false;
 }
@@ -237,11 +308,33 @@ bool parse_override(const std::string& text, toml::table& out, Context& ctx) {
 
 // ---- CSV-backed tables ------------------------------------------------------------------
 
-// Cycle: time_s and speed_kmh or speed_m_s; other columns ignored.
-plant::Table1d load_cycle(const std::string& path, const std::string& field, Context& ctx) {
-  io::CsvTable t;
+// Reads the CSV named by ref. A file that cannot be read is reported at the key that names
+// it; its follow-on problems (no table) are not.
+bool read_table(const FileRef& ref, const std::string& field, io::CsvTable& t, Context& ctx) {
   ctx.failed_tables.insert(field);
-  if (!io::read_csv_table(path, t, ctx.errors)) return {};
+  std::string content, reason;
+  if (!io::read_text_file(ref.path, content, reason)) {
+    ctx.unreadable(ref, reason);
+    return false;
+  }
+  return io::parse_csv_table(ref.path, content, t, ctx.errors);
+}
+
+// Remembers the CSV behind a table; csv_columns[k] is the CSV column of table column k.
+void keep_source(const std::string& field, const io::CsvTable& t, const std::vector<int>& csv_columns, Context& ctx) {
+  TableSource s{t.path, t.lines, {}, {}};
+  for (int c : csv_columns) {
+    s.columns.push_back(t.header[static_cast<std::size_t>(c)]);
+    s.text.push_back(t.text[static_cast<std::size_t>(c)]);
+  }
+  ctx.tables[field] = std::move(s);
+  ctx.failed_tables.erase(field);
+}
+
+// Cycle: time_s and speed_kmh or speed_m_s; other columns ignored.
+plant::Table1d load_cycle(const FileRef& ref, const std::string& field, Context& ctx) {
+  io::CsvTable t;
+  if (!read_table(ref, field, t, ctx)) return {};
   const int ti = t.column_index("time_s");
   int vi = t.column_index("speed_m_s");
   double scale = 1.0;
@@ -250,37 +343,38 @@ plant::Table1d load_cycle(const std::string& path, const std::string& field, Con
     scale = 1.0 / 3.6;
   }
   if (ti < 0 || vi < 0) {
-    ctx.errors.push_back(path + ":1: header: expected a time_s column and a speed_kmh or speed_m_s column");
+    std::string found;
+    for (const auto& h : t.header) found += (found.empty() ? "" : ", ") + h;
+    ctx.errors.push_back(t.path + ":" + std::to_string(t.header_line) + ": header: expected a time_s column and a " +
+                         "speed_kmh or speed_m_s column (found " + found + ")");
     return {};
   }
   std::vector<double> v = t.columns[static_cast<std::size_t>(vi)];
   for (double& s : v) s *= scale;
-  ctx.tables[field] = {path, t.lines};
-  ctx.failed_tables.erase(field);
+  keep_source(field, t, {ti, vi}, ctx);
   // end value held: a cycle does not extrapolate past its last row
   return plant::Table1d(t.columns[static_cast<std::size_t>(ti)], std::move(v), plant::Extrapolation::kHold);
 }
 
-plant::Table1d load_curve(const std::string& path, const std::string& field, Context& ctx) {
+plant::Table1d load_curve(const FileRef& ref, const std::string& field, Context& ctx) {
   io::CsvTable t;
-  ctx.failed_tables.insert(field);
-  if (!io::read_csv_table(path, t, ctx.errors)) return {};
+  if (!read_table(ref, field, t, ctx)) return {};
   if (t.header.size() < 2) {
-    ctx.errors.push_back(path + ":1: header: expected two columns (x, y)");
+    ctx.errors.push_back(t.path + ":" + std::to_string(t.header_line) + ": header: expected two columns (x, y)");
     return {};
   }
-  ctx.tables[field] = {path, t.lines};
-  ctx.failed_tables.erase(field);
+  keep_source(field, t, {0, 1}, ctx);
   return plant::Table1d(t.columns[0], t.columns[1], plant::Extrapolation::kHold);
 }
 
 // Tidy 2-D map "u1, u2, value" sorted by u1 then u2 (data/README.md) -> grid.
-plant::Table2d load_map(const std::string& path, const std::string& field, Context& ctx) {
+plant::Table2d load_map(const FileRef& ref, const std::string& field, Context& ctx) {
   io::CsvTable t;
-  ctx.failed_tables.insert(field);
-  if (!io::read_csv_table(path, t, ctx.errors)) return {};
+  if (!read_table(ref, field, t, ctx)) return {};
+  const std::string& path = t.path;
   if (t.header.size() != 3) {
-    ctx.errors.push_back(path + ":1: header: expected three columns (row axis, column axis, value)");
+    ctx.errors.push_back(path + ":" + std::to_string(t.header_line) +
+                         ": header: expected three columns (row axis, column axis, value)");
     return {};
   }
   std::vector<double> u1, u2;
@@ -288,16 +382,16 @@ plant::Table2d load_map(const std::string& path, const std::string& field, Conte
     const double a = t.columns[0][r], b = t.columns[1][r];
     if (u1.empty() || a != u1.back()) {
       if (!u1.empty() && !(a > u1.back())) {
-        ctx.errors.push_back(path + ":" + std::to_string(t.lines[r]) + ": " + field + " " + t.header[0] + " = " +
-                             io::number_text(a) + ": row axis must be strictly increasing");
+        ctx.errors.push_back(path + ":" + std::to_string(t.lines[r]) + ": " + field + ", column " + t.header[0] +
+                             " = " + t.text[0][r] + ": row axis must be strictly increasing");
         return {};
       }
       u1.push_back(a);
     }
     if (u1.size() == 1) {
       if (!u2.empty() && !(b > u2.back())) {
-        ctx.errors.push_back(path + ":" + std::to_string(t.lines[r]) + ": " + field + " " + t.header[1] + " = " +
-                             io::number_text(b) + ": column axis must be strictly increasing");
+        ctx.errors.push_back(path + ":" + std::to_string(t.lines[r]) + ": " + field + ", column " + t.header[1] +
+                             " = " + t.text[1][r] + ": column axis must be strictly increasing");
         return {};
       }
       u2.push_back(b);
@@ -316,8 +410,7 @@ plant::Table2d load_map(const std::string& path, const std::string& field, Conte
       return {};
     }
   }
-  ctx.where[field] = path;
-  ctx.failed_tables.erase(field);
+  keep_source(field, t, {0, 1, 2}, ctx);
   return plant::Table2d(std::move(u1), std::move(u2), t.columns[2]);
 }
 
@@ -335,7 +428,7 @@ plant::MapDriveParams read_drive(Reader r, Context& ctx) {
     p.loss_model = plant::DriveLossModel::kIdeal;
   } else if (model == "map") {
     p.loss_model = plant::DriveLossModel::kMap;
-    const std::string map = r.path("efficiency_map", true);
+    const FileRef map = r.path("efficiency_map", true);
     if (!map.empty()) p.efficiency_map = load_map(map, r.field("efficiency_map"), ctx);
   } else if (model == "formula") {
     p.loss_model = plant::DriveLossModel::kFormula;
@@ -369,8 +462,9 @@ plant::BatteryRcParams read_battery(Reader r) {
   p.c1_cell_F = r.opt_number("c1_cell_F");
   p.efficiency = r.number("efficiency", p.efficiency);
   p.cell_current_efficiency_A = r.opt_number("cell_current_efficiency_A");
-  p.cells_series = static_cast<int>(r.integer("cells_series", p.cells_series));
-  p.strings_parallel = static_cast<int>(r.integer("strings_parallel", p.strings_parallel));
+  // a pack of more than 100 000 cells in either direction is a typo, not a battery
+  p.cells_series = r.small_integer("cells_series", p.cells_series, 1, 100000);
+  p.strings_parallel = r.small_integer("strings_parallel", p.strings_parallel, 1, 100000);
   r.finish();
   return p;
 }
@@ -378,22 +472,37 @@ plant::BatteryRcParams read_battery(Reader r) {
 plant::RoadLoadParams read_road(Reader r, Context& ctx) {
   plant::RoadLoadParams p;
   const std::string form = r.text("form", "coefficients");
+  static constexpr std::array<std::string_view, 4> kCoefficientKeys = {"rolling_coefficient", "air_density_kg_m3",
+                                                                       "frontal_area_m2", "drag_coefficient"};
+  static constexpr std::array<std::string_view, 3> kCoastDownKeys = {"f0_N", "f1_N_s_m", "f2_N_s2_m2"};
+  // the keys of the other form are ignored with a warning, so that `--set road.form=...`
+  // can switch forms on a vehicle file that gives the other one
+  const auto ignore = [&](const auto& keys) {
+    for (std::string_view key : keys) {
+      if (!r.has(key)) continue;
+      const toml::node* n = r.find(key);
+      ctx.warn(ctx.where[r.field(key)], r.field(key), n != nullptr ? node_text(*n) : "",
+               "ignored: road.form is \"" + form + "\"");
+    }
+  };
   if (form == "coefficients") {
     p.form = plant::RoadLoadForm::kCoefficients;
     p.rolling_coefficient = r.required_number("rolling_coefficient");
     p.air_density_kg_m3 = r.number("air_density_kg_m3", p.air_density_kg_m3);
     p.frontal_area_m2 = r.required_number("frontal_area_m2");
     p.drag_coefficient = r.required_number("drag_coefficient");
+    ignore(kCoastDownKeys);
   } else if (form == "coast-down") {
     p.form = plant::RoadLoadForm::kCoastDown;
     p.f0_N = r.required_number("f0_N");
     p.f1_N_s_m = r.number("f1_N_s_m", 0.0);
     p.f2_N_s2_m2 = r.required_number("f2_N_s2_m2");
+    ignore(kCoefficientKeys);
   } else {
     ctx.error(ctx.where[r.field("form")], r.field("form"), "\"" + form + "\"",
               "must be \"coefficients\" or \"coast-down\"");
   }
-  const std::string slope = r.path("slope_table", false);
+  const FileRef slope = r.path("slope_table", false);
   if (!slope.empty()) p.slope_rad = load_curve(slope, r.field("slope"), ctx);
   r.finish();
   return p;
@@ -442,9 +551,9 @@ plant::MapIceParams read_ice(Reader r, Context& ctx) {
   p.fuel_lhv_J_kg = r.number("fuel_lhv_J_kg", p.fuel_lhv_J_kg);
   p.fuel_density_kg_m3 = r.number("fuel_density_kg_m3", p.fuel_density_kg_m3);
   p.on_off = r.flag("on_off", false);
-  const std::string curve = r.path("torque_max_table", true);
+  const FileRef curve = r.path("torque_max_table", true);
   if (!curve.empty()) p.torque_max_Nm = load_curve(curve, r.field("torque_max"), ctx);
-  const std::string sfc = r.path("sfc_map", true);
+  const FileRef sfc = r.path("sfc_map", true);
   if (!sfc.empty()) p.sfc_g_kWh = load_map(sfc, r.field("sfc_map"), ctx);
   r.finish();
   return p;
@@ -470,7 +579,7 @@ plant::PsdEcuParams read_ecu(Reader r, Context& ctx) {
   p.gen_filter_s = r.number("gen_filter_s", p.gen_filter_s);
   p.gen_torque_max_Nm = r.number("gen_torque_max_Nm", p.gen_torque_max_Nm);
   p.ice_speed_min_rad_s = r.number("ice_speed_min_rad_s", p.ice_speed_min_rad_s);
-  const std::string table = r.path("power_to_speed_table", true);
+  const FileRef table = r.path("power_to_speed_table", true);
   if (!table.empty()) {
     p.power_to_speed_rad_s = load_curve(table, r.field("power_to_speed"), ctx);
     // PowToW extrapolates linearly beyond its ends (§5.1)
@@ -488,7 +597,7 @@ plant::PsdEcuParams read_ecu(Reader r, Context& ctx) {
   return p;
 }
 
-plant::PsdParams read_psd(Reader& root, const std::string& cycle_path, Context& ctx) {
+plant::PsdParams read_psd(Reader& root, const FileRef& cycle, Context& ctx) {
   plant::PsdParams p;
   p.body = read_body(root.sub("vehicle"));
   p.road = read_road(root.sub("road"), ctx);
@@ -504,11 +613,11 @@ plant::PsdParams read_psd(Reader& root, const std::string& cycle_path, Context& 
     r.finish();
   }
   p.ecu = read_ecu(root.sub("ecu"), ctx);
-  if (!cycle_path.empty()) p.driver.cycle_m_s = load_cycle(cycle_path, "driver.cycle", ctx);
+  if (!cycle.empty()) p.driver.cycle_m_s = load_cycle(cycle, "driver.cycle", ctx);
   return p;
 }
 
-plant::BevParams read_bev(Reader& root, const std::string& cycle_path, Context& ctx) {
+plant::BevParams read_bev(Reader& root, const FileRef& cycle, Context& ctx) {
   plant::BevParams p;
   p.body = read_body(root.sub("vehicle"));
   p.road = read_road(root.sub("road"), ctx);
@@ -516,7 +625,7 @@ plant::BevParams read_bev(Reader& root, const std::string& cycle_path, Context& 
   p.battery = read_battery(root.sub("battery"));
   p.driver = read_driver(root.sub("driver"));
   p.brake = read_brake(root.sub("brake"));
-  if (!cycle_path.empty()) p.driver.cycle_m_s = load_cycle(cycle_path, "driver.cycle", ctx);
+  if (!cycle.empty()) p.driver.cycle_m_s = load_cycle(cycle, "driver.cycle", ctx);
   return p;
 }
 
@@ -553,7 +662,28 @@ plant::DriveRigParams read_rig(Reader& root, Context& ctx) {
   return p;
 }
 
-// Gives plant/ problems the file and line their value came from.
+plant::BatteryRigParams read_battery_rig(Reader& root, Context& ctx) {
+  plant::BatteryRigParams p;
+  p.battery = read_battery(root.sub("battery"));
+  for (Reader& r : root.table_array("profile")) {
+    plant::BatterySegment s;
+    const bool current = r.has("current_A"), power = r.has("power_W");
+    if (current == power) {
+      ctx.error(ctx.where.count(r.field("duration_s")) ? ctx.where[r.field("duration_s")] : r.field(""),
+                r.field("current_A"), "", "give either current_A or power_W (> 0 discharge, < 0 charge)");
+    }
+    s.kind = power ? plant::BatterySegment::Kind::kPower : plant::BatterySegment::Kind::kCurrent;
+    s.value = power ? r.number("power_W", 0.0) : r.number("current_A", 0.0);
+    if (current && power) r.find("current_A");  // reported above, not also unknown
+    s.duration_s = r.required_number("duration_s");
+    r.finish();
+    p.profile.push_back(s);
+  }
+  return p;
+}
+
+// Gives plant/ problems the file and line their value came from; a problem in a table cell
+// gets the CSV line, column and the value as written (a cycle in km/h stays in km/h).
 void report_plant_problems(const Problems& problems, Context& ctx, std::vector<std::string>* sink = nullptr) {
   for (const plant::Problem& pr : problems.list()) {
     // a table whose file failed to read, or a value the loader rejected, was reported already
@@ -561,27 +691,28 @@ void report_plant_problems(const Problems& problems, Context& ctx, std::vector<s
     bool reported = false;
     for (const std::string& failed : ctx.failed_tables) reported = reported || pr.field.rfind(failed, 0) == 0;
     if (reported) continue;
-    std::string loc;
-    const auto bracket = pr.field.find('[');
-    if (bracket != std::string::npos) {
-      const std::string base = pr.field.substr(0, bracket);
-      const auto t = ctx.tables.find(base);
-      const std::size_t row = std::stoul(pr.field.substr(bracket + 1));
-      if (t != ctx.tables.end()) {
-        loc = t->second.first + (row < t->second.second.size() ? ":" + std::to_string(t->second.second[row]) : "");
+    std::string loc, field = pr.field, value = pr.value;
+    if (const auto t = ctx.tables.find(pr.field); t != ctx.tables.end()) {
+      const TableSource& src = t->second;
+      loc = src.path;
+      if (pr.row >= 0 && static_cast<std::size_t>(pr.row) < src.lines.size()) {
+        const auto row = static_cast<std::size_t>(pr.row);
+        loc += ":" + std::to_string(src.lines[row]);
+        if (pr.column >= 0 && static_cast<std::size_t>(pr.column) < src.columns.size()) {
+          const auto col = static_cast<std::size_t>(pr.column);
+          field += ", column " + src.columns[col];
+          value = src.text[col][row];
+        }
       }
-    }
-    if (loc.empty()) {
-      if (auto t = ctx.tables.find(pr.field); t != ctx.tables.end()) loc = t->second.first;
     }
     if (loc.empty()) {
       if (auto w = ctx.where.find(pr.field); w != ctx.where.end()) loc = w->second;
     }
     if (loc.empty()) loc = "(vehicle)";
     if (sink != nullptr) {
-      sink->push_back(loc + ": " + pr.field + " = " + pr.value + ": " + pr.expected);
+      sink->push_back(loc + ": " + field + " = " + value + ": " + pr.expected);
     } else {
-      ctx.error(loc, pr.field, pr.value, pr.expected);
+      ctx.error(loc, field, value, pr.expected);
     }
   }
 }
@@ -608,7 +739,7 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
   out.path = path;
   out.name = fs::path(path).stem().string();
 
-  // layers: each --set, then the scenario file
+  // layers: each --set, the last given first (the last --set of a key wins), then the file
   std::vector<toml::table> set_docs(overrides.size());
   for (std::size_t i = 0; i < overrides.size(); ++i) parse_override(overrides[i], set_docs[i], ctx);
   toml::table scenario_doc;
@@ -617,13 +748,17 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
     return false;
   }
   std::vector<const toml::table*> layers;
-  for (const auto& d : set_docs) layers.push_back(&d);
+  for (auto d = set_docs.rbegin(); d != set_docs.rend(); ++d) layers.push_back(&*d);
   layers.push_back(&scenario_doc);
   Reader sc(layers, "", path, ctx);
 
   out.description = sc.text("description", "");
-  out.vehicle_path = sc.path("vehicle_file", true);
-  out.cycle_path = sc.path("cycle", false);
+  const FileRef vehicle_ref = sc.path("vehicle_file", true);
+  const FileRef cycle_ref = sc.path("cycle", false);
+  out.vehicle_path = vehicle_ref.path;
+  out.cycle_path = cycle_ref.path;
+  bool has_interval = false, has_decimation = false;
+  double interval_s = 0.1;
   {
     Reader r = sc.sub("solver");
     const std::string method = r.text("method", "rk4");
@@ -644,21 +779,19 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
   {
     Reader r = sc.sub("output");
     out.output.signals = r.strings("signals");
-    const bool has_interval = r.has("interval_s"), has_decimation = r.has("decimation");
-    const double interval_s = r.number("interval_s", 0.1);
+    has_interval = r.has("interval_s");
+    has_decimation = r.has("decimation");
+    interval_s = r.number("interval_s", interval_s);
     out.output.decimation = r.integer("decimation", 1);
     if (has_interval && has_decimation) {
       ctx.error(ctx.where["output.decimation"], "output.decimation", std::to_string(out.output.decimation),
                 "give either output.interval_s or output.decimation, not both");
-    } else if (has_decimation) {
-      if (out.output.decimation < 1) {
-        ctx.error(ctx.where["output.decimation"], "output.decimation", std::to_string(out.output.decimation),
-                  "must be >= 1");
-      }
-    } else if (!(interval_s > 0.0) || !std::isfinite(interval_s)) {
-      ctx.error(ctx.where["output.interval_s"], "output.interval_s", io::number_text(interval_s), "must be > 0 s");
-    } else if (out.solver.step_s > 0.0) {
-      out.output.decimation = std::max<std::int64_t>(1, std::llround(interval_s / out.solver.step_s));
+    } else if (has_decimation && out.output.decimation < 1) {
+      ctx.error(ctx.where["output.decimation"], "output.decimation", std::to_string(out.output.decimation),
+                "must be >= 1");
+    } else if (!has_decimation && !(interval_s > 0.0 && std::isfinite(interval_s))) {
+      ctx.error(ctx.where["output.interval_s"], "output.interval_s", io::number_text(interval_s),
+                "must be a finite number > 0 s");
     }
     r.finish();
   }
@@ -667,12 +800,12 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
   (void)sc.sub("vehicle");  // read below, as a layer over the vehicle file
   sc.finish();
   toml::table vehicle_doc;
-  if (out.vehicle_path.empty() || !parse_toml(out.vehicle_path, vehicle_doc, ctx)) {
+  if (vehicle_ref.empty() || !parse_toml(vehicle_ref.path, vehicle_doc, ctx, &vehicle_ref)) {
     errors = ctx.errors;
     return false;
   }
   std::vector<const toml::table*> vlayers;
-  for (const auto& d : set_docs) vlayers.push_back(d.get_as<toml::table>("vehicle"));
+  for (auto d = set_docs.rbegin(); d != set_docs.rend(); ++d) vlayers.push_back(d->get_as<toml::table>("vehicle"));
   vlayers.push_back(scenario_doc.get_as<toml::table>("vehicle"));
   vlayers.push_back(&vehicle_doc);
   Reader vr(vlayers, "", out.vehicle_path, ctx);
@@ -681,25 +814,31 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
   Problems problems, warnings;
   // vehicles with a driver: a cycle is required, and its length is the default duration
   const auto need_cycle = [&]() {
-    if (out.cycle_path.empty()) ctx.error(path, "cycle", "", "missing (a vehicle with a driver needs a cycle file)");
+    if (cycle_ref.empty()) ctx.error(path, "cycle", "", "missing (a vehicle with a driver needs a cycle file)");
   };
-  const auto default_duration = [&](const plant::PropDriverParams& driver) {
-    if (!driver.cycle_m_s.empty() && out.solver.duration_s == 0.0) out.solver.duration_s = driver.cycle_m_s.x().back();
+  const auto no_cycle = [&](const char* what) {
+    if (!cycle_ref.empty()) {
+      ctx.error(cycle_ref.where, "cycle", "\"" + cycle_ref.written + "\"", std::string(what) + " has no driver: remove the cycle");
+    }
   };
+  const auto default_duration = [&](double end_s) {
+    if (out.solver.duration_s == 0.0) out.solver.duration_s = end_s;
+  };
+  std::optional<double> ecu_period_s;  // vehicles with a built-in ECU
   if (kind == "bev") {
     need_cycle();
-    plant::BevParams p = read_bev(vr, out.cycle_path, ctx);
+    plant::BevParams p = read_bev(vr, cycle_ref, ctx);
     vr.finish();
-    default_duration(p.driver);
+    if (!p.driver.cycle_m_s.empty()) default_duration(p.driver.cycle_m_s.x().back());
     plant::validate(p, problems);
     if (problems.empty()) plant::warn(p.drive, "drive", warnings);
     check_signals(plant::BevPlant::kSignals, out.output.signals, ctx);
     out.plant = std::move(p);
   } else if (kind == "psd") {
     need_cycle();
-    plant::PsdParams p = read_psd(vr, out.cycle_path, ctx);
+    plant::PsdParams p = read_psd(vr, cycle_ref, ctx);
     vr.finish();
-    default_duration(p.driver);
+    if (!p.driver.cycle_m_s.empty()) default_duration(p.driver.cycle_m_s.x().back());
     plant::validate(p, problems);
     if (problems.empty()) {
       plant::warn(p.gen, "gen", warnings);
@@ -714,39 +853,94 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
                      "the built-in ECUs send icePowRef, not iceTauRef: with them this engine gives no torque");
       }
     }
-    // the ECU runs every whole number of plant steps
-    const double period_s = p.ecu.period_s > 0.0 ? p.ecu.period_s : out.solver.step_s;
-    const double ratio = period_s / out.solver.step_s;
-    out.solver.ecu_ratio = std::llround(ratio);
-    if (out.solver.ecu_ratio < 1 || std::abs(ratio - static_cast<double>(out.solver.ecu_ratio)) > 1e-9 * ratio) {
-      ctx.error(ctx.where["ecu.period_s"], "ecu.period_s", io::number_text(p.ecu.period_s),
-                "must be a whole multiple of solver.step_s = " + io::number_text(out.solver.step_s));
-    }
-    p.ecu.period_s = period_s;
+    ecu_period_s = p.ecu.period_s;
     check_signals(plant::PsdPlant::kSignals, out.output.signals, ctx);
     out.plant = std::move(p);
   } else if (kind == "drive_rig") {
-    if (!out.cycle_path.empty()) ctx.error(ctx.where["cycle"], "cycle", out.cycle_path, "a drive rig has no driver: remove the cycle");
+    no_cycle("a drive rig");
     plant::DriveRigParams p = read_rig(vr, ctx);
     vr.finish();
     plant::validate(p, problems);
     if (problems.empty()) plant::warn(p.drive, "drive", warnings);
     check_signals(plant::DriveRig(p).signals(), out.output.signals, ctx);
     out.plant = std::move(p);
+  } else if (kind == "battery_rig") {
+    no_cycle("a battery rig");
+    plant::BatteryRigParams p = read_battery_rig(vr, ctx);
+    vr.finish();
+    plant::validate(p, problems);
+    if (problems.empty()) {
+      double end_s = 0.0;
+      for (const plant::BatterySegment& seg : p.profile) end_s += seg.duration_s;
+      default_duration(end_s);
+    }
+    check_signals(plant::BatteryRig::kSignals, out.output.signals, ctx);
+    out.plant = std::move(p);
   } else {
-    ctx.error(ctx.where["kind"], "kind", "\"" + kind + "\"", "must be \"bev\", \"psd\" or \"drive_rig\"");
+    ctx.error(ctx.where["kind"], "kind", "\"" + kind + "\"",
+              "must be \"bev\", \"psd\", \"drive_rig\" or \"battery_rig\"");
   }
   report_plant_problems(problems, ctx);
   report_plant_problems(warnings, ctx, &out.warnings);
 
+  // steps, rows and ECU ticks: counts computed from user numbers, checked before rounding
+  const double h = out.solver.step_s;
+  const bool step_ok = h > 0.0 && h <= 1.0;
   if (ctx.failed_tables.count("driver.cycle") != 0 && out.solver.duration_s == 0.0) {
     // no cycle: its length is unknown, and the cycle's problem was reported already
   } else if (!(out.solver.duration_s > 0.0) || !std::isfinite(out.solver.duration_s)) {
     ctx.error(ctx.where["solver.duration_s"], "solver.duration_s", io::number_text(out.solver.duration_s),
-              "must be > 0 s (give it, or a cycle whose last time stamp sets it)");
-  } else if (out.solver.step_s > 0.0) {
-    out.solver.steps = std::llround(out.solver.duration_s / out.solver.step_s);
+              "must be a finite number > 0 s (give it, or a cycle whose last time stamp sets it)");
+  } else if (step_ok) {
+    const double ratio = out.solver.duration_s / h;
+    // blame the key the user gave: the duration, or else the step (the duration is the
+    // cycle's or the profile's length)
+    const bool duration_given = ctx.where["solver.duration_s"].find("(default)") == std::string::npos;
+    if (!(ratio < static_cast<double>(kMaxSteps) + 0.5)) {
+      const std::string too_many = io::number_text(ratio) + " steps, more than the limit of 1e10 per run; " +
+                                   "use a longer step or a shorter run";
+      if (duration_given) {
+        ctx.error(ctx.where["solver.duration_s"], "solver.duration_s", io::number_text(out.solver.duration_s),
+                  "with solver.step_s = " + io::number_text(h) + " s that is " + too_many);
+      } else {
+        ctx.error(ctx.where["solver.step_s"], "solver.step_s", io::number_text(h),
+                  "over the default duration of " + io::number_text(out.solver.duration_s) + " s that is " + too_many);
+      }
+    } else if (std::llround(ratio) < 1) {
+      ctx.error(ctx.where["solver.duration_s"], "solver.duration_s", io::number_text(out.solver.duration_s),
+                "shorter than half a step (solver.step_s = " + io::number_text(h) + "): the run would have no step");
+    } else {
+      out.solver.steps = std::llround(ratio);
+      const double end_s = static_cast<double>(out.solver.steps) * h;
+      if (std::abs(end_s - out.solver.duration_s) > 1e-9 * out.solver.duration_s) {
+        ctx.warn(ctx.where["solver.duration_s"], "solver.duration_s", io::number_text(out.solver.duration_s),
+                 "not a whole number of steps; the run ends at t = " + io::number_text(end_s) + " s");
+      }
+    }
   }
+  if (out.solver.steps > 0 && !has_decimation && interval_s > 0.0 && std::isfinite(interval_s)) {
+    // a row every interval, rounded to whole steps; an interval longer than the run gives
+    // the first and last rows only
+    const double ratio = interval_s / h;
+    out.output.decimation = ratio >= static_cast<double>(out.solver.steps) ? out.solver.steps
+                                                                          : std::max<std::int64_t>(1, std::llround(ratio));
+    if (ratio < 0.5 && has_interval) {
+      ctx.warn(ctx.where["output.interval_s"], "output.interval_s", io::number_text(interval_s),
+               "shorter than the step (" + io::number_text(h) + " s): every step is written");
+    }
+  }
+  if (ecu_period_s && step_ok) {
+    // the ECU runs every whole number of plant steps (0: every step)
+    const double period_s = *ecu_period_s > 0.0 ? *ecu_period_s : h;
+    const double ratio = period_s / h;
+    out.solver.ecu_ratio = ratio >= 0.5 && ratio < 1e9 ? std::llround(ratio) : 0;
+    if (out.solver.ecu_ratio < 1 || std::abs(ratio - static_cast<double>(out.solver.ecu_ratio)) > 1e-9 * ratio) {
+      ctx.error(ctx.where["ecu.period_s"], "ecu.period_s", io::number_text(*ecu_period_s),
+                "must be a whole multiple of solver.step_s = " + io::number_text(h));
+    }
+    std::get<plant::PsdParams>(out.plant).ecu.period_s = period_s;
+  }
+  for (std::string& w : ctx.warnings) out.warnings.push_back(std::move(w));
   errors = ctx.errors;
   return errors.empty();
 }

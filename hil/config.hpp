@@ -11,6 +11,7 @@
 #include <variant>
 #include <vector>
 
+#include "plant/battery_rig.hpp"
 #include "plant/bev_plant.hpp"
 #include "plant/drive_rigs.hpp"
 #include "plant/psd_plant.hpp"
@@ -19,6 +20,10 @@ namespace ehpt::hil {
 
 enum class SolverKind { kRk4, kImplicitEuler };
 const char* solver_name(SolverKind k);
+
+// The longest run: 1e10 steps (116 days at 1 ms, about 40 minutes of computation at
+// 250 ns per step). Anything longer is a typo in duration_s or step_s.
+inline constexpr std::int64_t kMaxSteps = 10'000'000'000;
 
 struct SolverSettings {
   SolverKind kind = SolverKind::kRk4;
@@ -39,7 +44,7 @@ struct Scenario {
   std::string description;
   std::string vehicle_path;
   std::string cycle_path;   // empty for rigs
-  std::variant<plant::BevParams, plant::DriveRigParams, plant::PsdParams> plant;
+  std::variant<plant::BevParams, plant::DriveRigParams, plant::PsdParams, plant::BatteryRigParams> plant;
   SolverSettings solver;
   OutputSettings output;
   std::vector<std::string> warnings;  // legal but surprising settings, "file:line: field = value: why"

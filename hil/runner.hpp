@@ -82,11 +82,12 @@ class Runner {
   }
 
   // Run phase: advances up to chunk_steps (no allocation, no I/O). Returns steps taken.
-  std::int64_t run(const std::atomic<bool>* stop = nullptr) {
+  // stop: a flag (e.g. the number of a signal) that ends the run when non-zero.
+  std::int64_t run(const std::atomic<int>* stop = nullptr) {
     const std::int64_t end = std::min(total_steps_, n_ + chunk_steps_);
     const std::int64_t start = n_;
     while (n_ < end && stats_.fault == 0) {
-      if (stop != nullptr && stop->load(std::memory_order_relaxed)) {
+      if (stop != nullptr && stop->load(std::memory_order_relaxed) != 0) {
         record_row_once();  // an interrupted run still ends with the state it reached
         break;
       }

@@ -3,8 +3,11 @@
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <system_error>
 
 #include <toml++/toml.h>
+
+#include "io/text_file.hpp"
 
 namespace fs = std::filesystem;
 
@@ -12,30 +15,51 @@ namespace ehpt::hil {
 
 std::string scenarios_dir() {
   if (const char* env = std::getenv("EHPT_SCENARIOS")) return env;
-  if (fs::is_directory("scenarios")) return "scenarios";
+  std::error_code ec;
+  if (fs::is_directory("scenarios", ec)) return "scenarios";
   return std::string(EHPT_SOURCE_DIR) + "/scenarios";
 }
 
-std::string resolve_scenario(const std::string& name) {
-  if (fs::is_regular_file(name)) return name;
-  const std::string dir = scenarios_dir();
-  for (const std::string& candidate : {dir + "/" + name, dir + "/" + name + ".toml"}) {
-    if (fs::is_regular_file(candidate)) return candidate;
+std::string resolve_scenario(const std::string& name, std::string& reason) {
+  std::error_code ec;
+  const fs::file_status st = fs::status(name, ec);
+  if (fs::exists(st)) {
+    if (fs::is_regular_file(st)) return name;
+    reason = "is " + io::describe_path(name) + ", not a scenario file";
+    return "";
   }
+  if (ec && ec != std::errc::no_such_file_or_directory) {
+    reason = ec.message();
+    return "";
+  }
+  // a bare name: look in the scenarios folder (a name with a slash is a path only)
+  if (name.find('/') == std::string::npos && !name.empty()) {
+    const std::string dir = scenarios_dir();
+    for (const std::string& candidate : {dir + "/" + name, dir + "/" + name + ".toml"}) {
+      if (fs::is_regular_file(candidate, ec)) return candidate;
+    }
+  }
+  reason = "no such scenario file or name (see 'ehpt list')";
   return "";
 }
 
 std::vector<ScenarioEntry> list_scenarios(const std::string& dir) {
   std::vector<ScenarioEntry> out;
   std::error_code ec;
-  for (const auto& e : fs::directory_iterator(dir, ec)) {
-    if (e.path().extension() != ".toml") continue;
-    ScenarioEntry s{e.path().stem().string(), e.path().string(), ""};
-    try {
-      const toml::table t = toml::parse_file(e.path().string());
-      s.description = t["description"].value_or(std::string());
-    } catch (const std::exception&) {
-      s.description = "(cannot parse)";
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const fs::path& p = it->path();
+    if (p.extension() != ".toml") continue;
+    ScenarioEntry s{p.stem().string(), p.string(), ""};
+    std::string text, reason;
+    if (!io::read_text_file(p.string(), text, reason)) {
+      s.description = "(cannot read: " + reason + ")";
+    } else {
+      try {
+        const toml::table t = toml::parse(text, p.string());
+        s.description = t["description"].value_or(std::string());
+      } catch (const toml::parse_error&) {
+        s.description = "(cannot parse)";
+      }
     }
     out.push_back(std::move(s));
   }

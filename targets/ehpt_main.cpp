@@ -3,24 +3,67 @@
 //   ehpt list [--dir DIR]
 //   ehpt signals SCENARIO
 //   ehpt plot DIR
+// Exit codes: 0 ok, 1 usage / output / system error (out of memory), 2 bad input (nothing
+// was run), 3 run-time fault (outputs kept), 128 + N stopped by signal N (130 SIGINT,
+// 143 SIGTERM, 129 SIGHUP; outputs so far kept and committed).
 
+#include <stdlib.h>  // mkdtemp
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <csignal>
 #include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <filesystem>
 #include <iostream>
+#include <new>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include "hil/batch.hpp"
 #include "hil/config.hpp"
 #include "hil/scenario.hpp"
+#include "io/output_dir.hpp"
+#include "io/process.hpp"
+
+namespace fs = std::filesystem;
 
 namespace {
 
-std::atomic<bool> g_stop{false};
-extern "C" void on_sigint(int) { g_stop.store(true); }
+// the number of the signal that asked us to stop (lock-free atomic: safe in a handler)
+std::atomic<int> g_stop{0};
+static_assert(std::atomic<int>::is_always_lock_free);
+extern "C" void on_stop_signal(int sig) { g_stop.store(sig); }
+
+// SIGINT, SIGTERM and SIGHUP end a run cleanly (outputs kept and committed); SIGPIPE is
+// ignored so that a closed pipe on stdout is a write error we report, not a silent death.
+void install_signal_handlers() {
+  struct sigaction sa {};
+  sa.sa_handler = on_stop_signal;
+  sigemptyset(&sa.sa_mask);
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaction(sig, &sa, nullptr);
+  std::signal(SIGPIPE, SIG_IGN);
+}
+
+// Writes text to stdout now. False (and a message on stderr) if it cannot: a full disk,
+// a closed pipe. Plain write(2), so that the reason is known.
+bool out(const std::string& text) {
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(STDOUT_FILENO, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      std::cerr << "error: cannot write to standard output: " << (n < 0 ? std::strerror(errno) : "no progress") << "\n";
+      return false;
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  return true;
+}
 
 const char* kMainHelp =
     "ehpt - electric and hybrid power-train plant models (SIL/HIL)\n"
@@ -34,20 +77,26 @@ const char* kMainHelp =
     "  plot DIR         draw PNG figures from a run's output folder (needs /usr/bin/python3 + matplotlib)\n"
     "\n"
     "'ehpt <command> --help' gives the options of a command.\n"
-    "Exit codes: 0 ok, 1 usage or output error, 2 bad input (nothing run), 3 run-time fault\n"
-    "(outputs kept), 130 interrupted (outputs so far kept).\n";
+    "Exit codes: 0 ok, 1 usage, output or system error, 2 bad input (nothing run), 3 run-time\n"
+    "fault (outputs kept), 128+N stopped by signal N: 130 Ctrl-C, 143 SIGTERM, 129 SIGHUP\n"
+    "(outputs so far kept).\n";
 
 const char* kRunHelp =
     "usage: ehpt run SCENARIO [--out DIR] [--set key=value ...] [--plot] [--quiet]\n"
     "\n"
     "SCENARIO is a .toml file, or a name from 'ehpt list' (e.g. ev_nedc).\n"
-    "  --out DIR        output folder (default out/<scenario name>); written as DIR.partial\n"
-    "                   and renamed to DIR when complete\n"
-    "  --set key=value  override a scenario key, repeatable. Vehicle keys take the prefix\n"
-    "                   'vehicle.': --set vehicle.battery.soc_initial=0.6\n"
+    "  --out DIR        output folder (default out/<scenario name>); written as\n"
+    "                   DIR.partial-<pid> and renamed to DIR when complete. An existing DIR\n"
+    "                   is replaced only if it is empty or an earlier ehpt run holding only\n"
+    "                   the files its ehpt-manifest.txt lists; a second run with the same\n"
+    "                   --out stops at once (exit 1)\n"
+    "  --set key=value  override a scenario key, repeatable (the last one of a key wins).\n"
+    "                   Vehicle keys take the prefix 'vehicle.':\n"
+    "                   --set vehicle.battery.soc_initial=0.6\n"
     "                   --set solver.method=implicit-euler --set solver.step_s=0.002\n"
     "                   --set output.interval_s=0.01 --set solver.duration_s=100\n"
-    "  --plot           draw the figures after the run (as 'ehpt plot DIR')\n"
+    "  --plot           draw the figures into DIR (as 'ehpt plot DIR'); a failed plot\n"
+    "                   keeps the run and exits 1\n"
     "  --quiet          print nothing but errors\n"
     "\n"
     "Every problem in the scenario, vehicle, cycle or map files is listed as\n"
@@ -65,7 +114,8 @@ const char* kSignalsHelp =
 const char* kPlotHelp =
     "usage: ehpt plot DIR\n"
     "Draws PNG figures (speed, torques and limiter state, powers, SOC, locked flag) from\n"
-    "DIR/timeseries.csv into DIR, with tools/plot.py under /usr/bin/python3.\n";
+    "DIR/timeseries.csv into DIR, with tools/plot.py under /usr/bin/python3. A figure\n"
+    "replaces a file of the same name only if DIR's ehpt-manifest.txt lists it.\n";
 
 bool wants_help(const std::vector<std::string>& args) {
   for (const auto& a : args) {
@@ -74,21 +124,76 @@ bool wants_help(const std::vector<std::string>& args) {
   return false;
 }
 
-int plot(const std::string& dir, bool quiet) {
-  const std::string script = ehpt::hil::tools_dir() + "/plot.py";
-  const std::string cmd = "/usr/bin/python3 '" + script + "' '" + dir + "'" + (quiet ? " --quiet" : "");
-  const int rc = std::system(cmd.c_str());
-  if (rc != 0) {
-    std::cerr << "error: plotting failed (" << cmd << ")\n";
+// Draws the figures of the run in src_dir into out_dir with the plot tool (no shell: an
+// argument vector), naming them as if in shown_dir. True on success.
+bool run_plot_tool(const std::string& src_dir, const std::string& out_dir, const std::string& shown_dir, bool quiet) {
+  std::vector<std::string> argv = {"/usr/bin/python3", ehpt::hil::tools_dir() + "/plot.py", src_dir,
+                                   "--out-dir", out_dir, "--as", shown_dir};
+  if (quiet) argv.push_back("--quiet");
+  std::string reason;
+  const int rc = ehpt::io::run_program(argv, reason);
+  if (rc == 0) return true;
+  if (rc < 0) {
+    std::cerr << "error: plotting failed: cannot start " << reason << "\n";
+  } else {
+    std::cerr << "error: plotting failed (the plot tool exited with " << rc << ")\n";
+  }
+  return false;
+}
+
+// `ehpt plot DIR`: draw into a private folder inside DIR, then move each figure into DIR.
+// An existing file is replaced only if DIR is an ehpt run whose manifest lists it.
+int plot_existing(const std::string& dir, bool quiet) {
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) {
+    std::cerr << "error: " << dir << ": not a folder (give a run's output folder)\n";
     return 1;
   }
-  return 0;
+  std::vector<std::string> listed;
+  std::string why;
+  const bool ehpt_run = ehpt::io::is_earlier_run(dir, listed, why);
+  std::string tmpl = dir + "/.ehpt-plot-XXXXXX";
+  if (::mkdtemp(tmpl.data()) == nullptr) {
+    std::cerr << "error: " << dir << ": cannot create a temporary folder: " << std::strerror(errno) << "\n";
+    return 1;
+  }
+  const std::string tmp = tmpl;  // ours: made by mkdtemp in this process
+  bool ok = run_plot_tool(dir, tmp, dir, quiet);
+  std::vector<std::string> moved;
+  for (fs::directory_iterator it(tmp, ec), end; ok && !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    const std::string target = dir + "/" + name;
+    const bool exists = fs::exists(fs::symlink_status(target, ec));
+    const bool ours = ehpt_run && std::find(listed.begin(), listed.end(), name) != listed.end();
+    if (exists && !ours) {
+      std::cerr << "error: " << target << ": exists and is not a figure ehpt made; kept, the new figure is not written\n";
+      ok = false;
+      continue;
+    }
+    fs::rename(it->path(), target, ec);
+    if (ec) {
+      std::cerr << "error: " << target << ": " << ec.message() << "\n";
+      ok = false;
+      continue;
+    }
+    moved.push_back(name);
+  }
+  fs::remove_all(tmp, ec);
+  std::string error;
+  if (ehpt_run && !moved.empty() && !ehpt::io::add_to_manifest(dir, moved, error)) {
+    std::cerr << "error: " << error << "\n";
+    ok = false;
+  }
+  return ok ? 0 : 1;
 }
 
 int load(const std::string& name, const std::vector<std::string>& sets, ehpt::hil::Scenario& sc) {
-  const std::string path = ehpt::hil::resolve_scenario(name);
+  std::string reason;
+  const std::string path = ehpt::hil::resolve_scenario(name, reason);
   if (path.empty()) {
-    std::cerr << name << ": no such scenario file or name (see 'ehpt list')\n";
+    // a hostile name can be very long: print its start
+    const std::string shown = name.size() <= 200 ? name : name.substr(0, 80) + "... (" + std::to_string(name.size()) + " characters)";
+    std::cerr << shown << ": " << reason << "\n";
     return 2;
   }
   std::vector<std::string> errors;
@@ -101,11 +206,8 @@ int load(const std::string& name, const std::vector<std::string>& sets, ehpt::hi
 }
 
 int cmd_run(const std::vector<std::string>& args) {
-  if (wants_help(args)) {
-    std::cout << kRunHelp;
-    return 0;
-  }
-  std::string scenario, out;
+  if (wants_help(args)) return out(kRunHelp) ? 0 : 1;
+  std::string scenario, out_dir;
   std::vector<std::string> sets;
   bool do_plot = false, quiet = false;
   for (std::size_t i = 0; i < args.size(); ++i) {
@@ -115,7 +217,7 @@ int cmd_run(const std::vector<std::string>& args) {
       return 1;
     }
     if (a == "--out") {
-      out = args[++i];
+      out_dir = args[++i];
     } else if (a == "--set") {
       sets.push_back(args[++i]);
     } else if (a == "--plot") {
@@ -141,35 +243,39 @@ int cmd_run(const std::vector<std::string>& args) {
   if (!quiet) {
     for (const auto& w : sc.warnings) std::cerr << "warning: " << w << "\n";
   }
-  if (out.empty()) out = "out/" + sc.name;
+  if (out_dir.empty()) out_dir = "out/" + sc.name;
 
-  std::signal(SIGINT, on_sigint);
-  std::signal(SIGTERM, on_sigint);
   ehpt::hil::BatchOptions opt;
-  opt.out_dir = out;
+  opt.out_dir = out_dir;
   opt.progress = !quiet && isatty(STDERR_FILENO);
-  opt.stop = &g_stop;
+  opt.stop_signal = &g_stop;
+  if (do_plot) {
+    // drawn into the temporary folder, so the figures are part of the committed run
+    opt.before_commit = [&](const std::string& dir) { return run_plot_tool(dir, dir, out_dir, quiet); };
+  }
   const ehpt::hil::BatchResult r = ehpt::hil::run_batch(sc, opt, std::cerr);
   if (!quiet) {
-    std::cout << r.summary_text;
-    if (r.exit_code != 1) std::cout << "outputs       " << out << "/timeseries.csv, " << out << "/summary.json\n";
+    for (const auto& w : r.warnings) std::cerr << "warning: " << w << "\n";
   }
-  if (r.exit_code == 1) return 1;
-  std::cout << std::flush;  // the summary before the plot tool's lines
-  if (do_plot) {
-    const int prc = plot(out, quiet);
-    if (prc != 0 && r.exit_code == 0) return prc;
+  bool printed = true;
+  if (!quiet) {
+    std::string text = r.summary_text;
+    if (r.exit_code != 1) text += "outputs       " + out_dir + "/timeseries.csv, " + out_dir + "/summary.json\n";
+    printed = out(text);
   }
-  return r.exit_code;
+  if (r.exit_code != 0) return r.exit_code;
+  return printed && !r.after_failed ? 0 : 1;
 }
 
 int cmd_list(const std::vector<std::string>& args) {
-  if (wants_help(args)) {
-    std::cout << kListHelp;
-    return 0;
-  }
+  if (wants_help(args)) return out(kListHelp) ? 0 : 1;
   std::string dir = ehpt::hil::scenarios_dir();
-  if (args.size() == 2 && args[0] == "--dir") dir = args[1];
+  if (args.size() == 2 && args[0] == "--dir") {
+    dir = args[1];
+  } else if (!args.empty()) {
+    std::cerr << kListHelp;
+    return 1;
+  }
   const auto list = ehpt::hil::list_scenarios(dir);
   if (list.empty()) {
     std::cerr << dir << ": no scenarios (*.toml)\n";
@@ -177,60 +283,83 @@ int cmd_list(const std::vector<std::string>& args) {
   }
   std::size_t width = 0;
   for (const auto& s : list) width = std::max(width, s.name.size());
-  for (const auto& s : list) std::cout << s.name << std::string(width + 2 - s.name.size(), ' ') << s.description << "\n";
-  return 0;
+  std::string text;
+  for (const auto& s : list) text += s.name + std::string(width + 2 - s.name.size(), ' ') + s.description + "\n";
+  return out(text) ? 0 : 1;
 }
 
 template <class Signals>
-void print_signals(const Signals& signals) {
+std::string signal_lines(const Signals& signals) {
+  std::string text;
   for (const auto& s : signals) {
-    std::cout << s.name << std::string(s.name.size() < 24 ? 24 - s.name.size() : 1, ' ') << s.meaning << "\n";
+    text += std::string(s.name) + std::string(s.name.size() < 24 ? 24 - s.name.size() : 1, ' ') +
+            std::string(s.meaning) + "\n";
   }
+  return text;
 }
 
 int cmd_signals(const std::vector<std::string>& args) {
   if (wants_help(args) || args.size() != 1) {
-    std::cout << kSignalsHelp;
-    return args.size() == 1 ? 0 : 1;
+    if (args.size() != 1) {
+      std::cerr << kSignalsHelp;
+      return 1;
+    }
+    return out(kSignalsHelp) ? 0 : 1;
   }
   ehpt::hil::Scenario sc;
   if (const int rc = load(args[0], {}, sc); rc != 0) return rc;
+  std::string text;
   if (const auto* p = std::get_if<ehpt::plant::BevParams>(&sc.plant)) {
-    print_signals(ehpt::plant::BevPlant(*p).signals());
+    text = signal_lines(ehpt::plant::BevPlant(*p).signals());
   } else if (const auto* q = std::get_if<ehpt::plant::PsdParams>(&sc.plant)) {
-    print_signals(ehpt::plant::PsdPlant(*q).signals());
+    text = signal_lines(ehpt::plant::PsdPlant(*q).signals());
+  } else if (const auto* b = std::get_if<ehpt::plant::BatteryRigParams>(&sc.plant)) {
+    text = signal_lines(ehpt::plant::BatteryRig(*b).signals());
   } else {
-    print_signals(ehpt::plant::DriveRig(std::get<ehpt::plant::DriveRigParams>(sc.plant)).signals());
+    text = signal_lines(ehpt::plant::DriveRig(std::get<ehpt::plant::DriveRigParams>(sc.plant)).signals());
   }
-  return 0;
+  return out(text) ? 0 : 1;
 }
 
 int cmd_plot(const std::vector<std::string>& args) {
   if (wants_help(args) || args.size() != 1) {
-    std::cout << kPlotHelp;
-    return args.size() == 1 ? 0 : 1;
+    if (args.size() != 1) {
+      std::cerr << kPlotHelp;
+      return 1;
+    }
+    return out(kPlotHelp) ? 0 : 1;
   }
-  return plot(args[0], false);
+  return plot_existing(args[0], false);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  std::vector<std::string> args(argv + 1, argv + argc);
+int dispatch(std::vector<std::string> args) {
   if (args.empty()) {
     std::cerr << kMainHelp;
     return 1;
   }
   const std::string cmd = args[0];
   args.erase(args.begin());
-  if (cmd == "--help" || cmd == "-h" || cmd == "help") {
-    std::cout << kMainHelp;
-    return 0;
-  }
+  if (cmd == "--help" || cmd == "-h" || cmd == "help") return out(kMainHelp) ? 0 : 1;
   if (cmd == "run") return cmd_run(args);
   if (cmd == "list") return cmd_list(args);
   if (cmd == "signals") return cmd_signals(args);
   if (cmd == "plot") return cmd_plot(args);
   std::cerr << "unknown command '" << cmd << "'\n\n" << kMainHelp;
+  return 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  install_signal_handlers();
+  // nothing escapes as an abort: out of memory and any other exception end with one line
+  // (an output folder being written is removed by its destructor: it holds nothing useful)
+  try {
+    return dispatch(std::vector<std::string>(argv + 1, argv + argc));
+  } catch (const std::bad_alloc&) {
+    std::cerr << "error: out of memory\n";
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
+  }
   return 1;
 }

@@ -1,8 +1,10 @@
 #!/usr/bin/python3
 """Draw PNG figures from an ehpt run folder.
 
-Usage: /usr/bin/python3 tools/plot.py DIR [--quiet]
+Usage: /usr/bin/python3 tools/plot.py DIR [--out-dir OUT] [--as NAME] [--quiet]
 
+Figures are written into OUT (default DIR); messages name them as if in NAME (default
+OUT): ehpt draws into a private folder and moves the figures into place itself.
 DIR must hold timeseries.csv (header of column names, then numeric rows) and
 usually summary.json.  Vehicle runs (column speed_m_s etc.) give speed, torque,
 power, soc and locked figures; drive-rig runs (TestMBOneFlange/TestTwoFlange,
@@ -82,8 +84,9 @@ def load_summary(path):
 
 
 class Plotter:
-    def __init__(self, out_dir, cols, scenario, quiet):
+    def __init__(self, out_dir, cols, scenario, quiet, shown_dir=None):
         self.dir, self.c, self.scenario, self.quiet = out_dir, cols, scenario, quiet
+        self.shown_dir = shown_dir or out_dir
         self.written = 0
         if "time_s" in cols:
             self.t, self.tlabel = cols["time_s"], "time [s]"
@@ -140,7 +143,7 @@ class Plotter:
             plt.close(fig)
         self.written += 1
         if not self.quiet:
-            print(f"wrote {target}")
+            print(f"wrote {os.path.join(self.shown_dir, name)}")
 
     # ---------------------------------------------------------------- vehicle runs
     def vehicle(self):
@@ -224,15 +227,19 @@ class Plotter:
                     ax.plot(t, c["speed_m_s"] * 3.6, color="tab:blue", label="actual")
                     ax.set_ylabel("speed [km/h]")
                 elif n == "iceW_rad_s":
-                    ax.plot(t, c["iceW_rad_s"], color="tab:brown", label="engine speed")
+                    on = "iceON" in c
+                    # with the ON flag: one legend, on the twin axis (drawn on top), with a
+                    # proxy for the speed, so the two labels cannot overlap
+                    ax.plot(t, c["iceW_rad_s"], color="tab:brown", label=None if on else "engine speed")
                     ax.set_ylabel("engine [rad/s]")
-                    if "iceON" in c:
+                    if on:
                         ax2 = ax.twinx()
-                        ax2.step(t, c["iceON"], where="post", color="tab:red", alpha=0.7, label="iceON")
+                        ax2.plot([], [], color="tab:brown", label="engine speed (left axis)")
+                        ax2.step(t, c["iceON"], where="post", color="tab:red", alpha=0.7,
+                                 label="iceON (right axis)")
                         ax2.set_yticks([0, 1])
                         ax2.set_ylim(-0.1, 1.6)
                         ax2.set_ylabel("ON")
-                        ax2.legend(loc="upper left", fontsize="small")
                 else:
                     ax.plot(t, c["soc"], color="tab:green", label="SOC")
                     ax.set_ylabel("SOC")
@@ -302,16 +309,36 @@ class Plotter:
             self.save(fig, "efficiency.png")
 
 
+USAGE = "usage: /usr/bin/python3 tools/plot.py DIR [--out-dir OUT] [--as NAME] [--quiet]"
+
+
 def main(argv):
-    args = [a for a in argv if a != "--quiet"]
-    quiet = len(args) != len(argv)
-    if len(args) != 1 or args[0].startswith("-"):
-        print("usage: /usr/bin/python3 tools/plot.py DIR [--quiet]", file=sys.stderr)
+    quiet, src, out_dir, shown = False, None, None, None
+    it = iter(argv)
+    for a in it:
+        if a == "--quiet":
+            quiet = True
+        elif a in ("--out-dir", "--as"):
+            value = next(it, None)
+            if value is None:
+                print(USAGE, file=sys.stderr)
+                return 2
+            if a == "--out-dir":
+                out_dir = value
+            else:
+                shown = value
+        elif a.startswith("-") or src is not None:
+            print(USAGE, file=sys.stderr)
+            return 2
+        else:
+            src = a
+    if src is None:
+        print(USAGE, file=sys.stderr)
         return 2
-    out_dir = args[0]
-    cols = load_csv(os.path.join(out_dir, "timeseries.csv"))
-    scenario = load_summary(os.path.join(out_dir, "summary.json")).get("scenario")
-    p = Plotter(out_dir, cols, str(scenario) if scenario else "", quiet)
+    out_dir = out_dir or src
+    cols = load_csv(os.path.join(src, "timeseries.csv"))
+    scenario = load_summary(os.path.join(src, "summary.json")).get("scenario")
+    p = Plotter(out_dir, cols, str(scenario) if scenario else "", quiet, shown)
     if RIG_COLUMNS & cols.keys():
         p.rig()
     else:
@@ -319,7 +346,7 @@ def main(argv):
         if "iceW_rad_s" in cols:
             p.hybrid()
     if p.written == 0 and not quiet:
-        print(f"plot.py: note: no plottable columns in {out_dir}/timeseries.csv", file=sys.stderr)
+        print(f"plot.py: note: no plottable columns in {src}/timeseries.csv", file=sys.stderr)
     return 0
 
 

@@ -68,7 +68,7 @@ TEST(Config, OutputIntervalAndDecimationAreCheckedAndEachProblemReportedOnce) {
   std::vector<std::string> errors;
   EXPECT_FALSE(load_scenario(test::source_path("scenarios/ev_sort1.toml"), {"output.interval_s=-1"}, sc, errors));
   ASSERT_EQ(errors.size(), 1u);
-  EXPECT_EQ(errors[0], "--set output.interval_s=-1: output.interval_s = -1: must be > 0 s");
+  EXPECT_EQ(errors[0], "--set output.interval_s=-1: output.interval_s = -1: must be a finite number > 0 s");
   errors.clear();
   EXPECT_FALSE(load_scenario(test::source_path("scenarios/ev_sort1.toml"), {"output.decimation=10"}, sc, errors));
   ASSERT_EQ(errors.size(), 1u);  // ev_sort1 gives interval_s already
@@ -78,6 +78,90 @@ TEST(Config, OutputIntervalAndDecimationAreCheckedAndEachProblemReportedOnce) {
       load_scenario(test::source_path("scenarios/ev_sort1.toml"), {"vehicle.driver.gain=abc"}, sc, errors));
   ASSERT_EQ(errors.size(), 1u) << errors[0] << " / " << errors.back();
   EXPECT_EQ(errors[0], "--set vehicle.driver.gain=abc: driver.gain = 'abc': must be a number");
+}
+
+// Loads ev_sort1 with the overrides; returns the problems (empty: loaded).
+std::vector<std::string> problems_with(const std::vector<std::string>& sets, Scenario& sc) {
+  std::vector<std::string> errors;
+  load_scenario(test::source_path("scenarios/ev_sort1.toml"), sets, sc, errors);
+  return errors;
+}
+
+TEST(Config, StepCountsAreCheckedBeforeTheyAreRounded) {
+  Scenario sc;
+  // each of these ran 0 steps (or ~1e15) and reported "ok" before
+  for (const char* set : {"solver.step_s=1e-300", "solver.step_s=1e-18", "solver.duration_s=1e308",
+                          "solver.duration_s=1e-9", "solver.duration_s=1e12"}) {
+    const auto errors = problems_with({set}, sc);
+    ASSERT_EQ(errors.size(), 1u) << set;
+    EXPECT_EQ(errors[0].rfind(std::string("--set ") + set + ": ", 0), 0u) << errors[0];
+  }
+  EXPECT_NE(problems_with({"solver.duration_s=1e-9"}, sc)[0].find("the run would have no step"), std::string::npos);
+  EXPECT_NE(problems_with({"solver.duration_s=1e12"}, sc)[0].find("1e+15 steps, more than the limit of 1e10"),
+            std::string::npos);
+  // the step is blamed when the duration is the cycle's
+  EXPECT_NE(problems_with({"solver.step_s=1e-18"}, sc)[0].find("solver.step_s = 1e-18: over the default duration of "
+                                                               "150 s that is 1.5e+20 steps"),
+            std::string::npos);
+  // at the bound: 1e10 steps is allowed, one more is not
+  ASSERT_TRUE(problems_with({"solver.step_s=1e-6", "solver.duration_s=10000"}, sc).empty());
+  EXPECT_EQ(sc.solver.steps, kMaxSteps);
+  EXPECT_EQ(problems_with({"solver.step_s=1e-6", "solver.duration_s=10000.001"}, sc).size(), 1u);
+}
+
+TEST(Config, AnIntervalLongerThanTheRunWritesTheFirstAndLastRowsOnly) {
+  Scenario sc;
+  ASSERT_TRUE(problems_with({"output.interval_s=1e30"}, sc).empty());
+  EXPECT_EQ(sc.output.decimation, sc.solver.steps);  // was: llround overflowed, every step written
+  ASSERT_TRUE(problems_with({"output.interval_s=0.02"}, sc).empty());
+  EXPECT_EQ(sc.output.decimation, 20);
+  ASSERT_TRUE(problems_with({"output.interval_s=1e-6"}, sc).empty());
+  EXPECT_EQ(sc.output.decimation, 1);
+  ASSERT_EQ(sc.warnings.size(), 1u);
+  EXPECT_NE(sc.warnings[0].find("shorter than the step (0.001 s): every step is written"), std::string::npos);
+}
+
+TEST(Config, IntegersAreRangeCheckedBeforeNarrowingAndPrintedAsWritten) {
+  Scenario sc;
+  const auto errors = problems_with({"vehicle.battery.cells_series=4294967396"}, sc);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_EQ(errors[0], "--set vehicle.battery.cells_series=4294967396: battery.cells_series = 4294967396: "
+                       "must be a whole number in [1, 100000]");
+  EXPECT_EQ(problems_with({"vehicle.battery.strings_parallel=0"}, sc).size(), 1u);
+  EXPECT_EQ(problems_with({"vehicle.battery.strings_parallel=1.5"}, sc).size(), 1u);
+  ASSERT_TRUE(problems_with({"vehicle.battery.cells_series=100000"}, sc).empty());
+  EXPECT_EQ(std::get<plant::BevParams>(sc.plant).battery.cells_series, 100000);
+}
+
+TEST(Config, TheLastSetOfAKeyWins) {
+  Scenario sc;
+  ASSERT_TRUE(problems_with({"vehicle.vehicle.mass_kg=1000", "vehicle.vehicle.mass_kg=1500"}, sc).empty());
+  EXPECT_EQ(std::get<plant::BevParams>(sc.plant).body.mass_kg, 1500.0);
+  ASSERT_TRUE(problems_with({"solver.step_s=0.002", "solver.step_s=0.0005"}, sc).empty());
+  EXPECT_EQ(sc.solver.step_s, 0.0005);
+}
+
+TEST(Config, ACoastingCarHasGainZero) {
+  Scenario sc;
+  ASSERT_TRUE(problems_with({"vehicle.driver.gain=0"}, sc).empty());
+  EXPECT_EQ(std::get<plant::BevParams>(sc.plant).driver.gain, 0.0);
+  EXPECT_EQ(problems_with({"vehicle.driver.gain=-1"}, sc).size(), 1u);
+}
+
+TEST(Config, RoadFormCanBeSwitchedWithSetAndTheOtherKeysAreIgnoredWithAWarning) {
+  Scenario sc;
+  ASSERT_TRUE(problems_with({"vehicle.road.form=coast-down", "vehicle.road.f0_N=150", "vehicle.road.f2_N_s2_m2=0.4"},
+                            sc)
+                  .empty());
+  const auto& road = std::get<plant::BevParams>(sc.plant).road;
+  EXPECT_EQ(road.form, plant::RoadLoadForm::kCoastDown);
+  EXPECT_EQ(road.f0_N, 150.0);
+  EXPECT_EQ(road.f2_N_s2_m2, 0.4);
+  int ignored = 0;
+  for (const auto& w : sc.warnings) ignored += w.find("ignored: road.form is \"coast-down\"") != std::string::npos;
+  EXPECT_EQ(ignored, 4) << (sc.warnings.empty() ? "" : sc.warnings[0]);  // fc, rho, S, Cx of mbev.toml
+  // the coast-down keys are still required
+  EXPECT_EQ(problems_with({"vehicle.road.form=coast-down"}, sc).size(), 2u);
 }
 
 }  // namespace

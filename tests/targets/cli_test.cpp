@@ -2,23 +2,34 @@
 // output folder; good runs are bit-identical; a run-time fault keeps its outputs.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <regex>
 #include <sstream>
+#include <thread>
+#include <tuple>
 
 #include "test_plants.hpp"
+
+extern char** environ;
 
 namespace fs = std::filesystem;
 
 namespace {
 
 struct Result {
-  int exit_code = -1;
+  int exit_code = -1;  // 128 + N when killed by signal N
   std::string out, err;
 };
 
@@ -29,25 +40,83 @@ std::string slurp(const std::string& path) {
   return s.str();
 }
 
-Result ehpt(const std::string& args) {
-  // one folder per test: ctest runs tests in parallel
+// One folder per test for the captured streams: ctest runs tests in parallel.
+fs::path capture_dir() {
   const fs::path tmp = fs::temp_directory_path() /
                        ("ehpt_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
   fs::create_directories(tmp);
-  const std::string out = (tmp / "stdout").string(), err = (tmp / "stderr").string();
-  const std::string cmd = std::string(EHPT_BINARY) + " " + args + " >" + out + " 2>" + err;
-  const int status = std::system(cmd.c_str());
+  return tmp;
+}
+
+// Starts the binary with an argument vector (no shell), stdout and stderr into files, or
+// stdout into stdout_fd when given. env: extra "NAME=value" entries.
+pid_t spawn_ehpt(const std::vector<std::string>& args, const std::string& tag, int stdout_fd = -1,
+                 const std::vector<std::string>& env = {}) {
+  const fs::path tmp = capture_dir();
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  if (stdout_fd >= 0) {
+    posix_spawn_file_actions_adddup2(&fa, stdout_fd, STDOUT_FILENO);
+  } else {
+    posix_spawn_file_actions_addopen(&fa, STDOUT_FILENO, (tmp / (tag + ".out")).c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  }
+  posix_spawn_file_actions_addopen(&fa, STDERR_FILENO, (tmp / (tag + ".err")).c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  std::vector<std::string> argv_s = {EHPT_BINARY};
+  argv_s.insert(argv_s.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& a : argv_s) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  std::vector<std::string> env_s;
+  for (char** e = environ; *e != nullptr; ++e) env_s.emplace_back(*e);
+  env_s.insert(env_s.end(), env.begin(), env.end());
+  std::vector<char*> envp;
+  for (auto& e : env_s) envp.push_back(e.data());
+  envp.push_back(nullptr);
+  pid_t pid = -1;
+  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), envp.data());
+  posix_spawn_file_actions_destroy(&fa);
+  EXPECT_EQ(rc, 0);
+  return pid;
+}
+
+Result wait_ehpt(pid_t pid, const std::string& tag) {
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
   Result r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = slurp(out);
-  r.err = slurp(err);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : WIFSIGNALED(status) ? 128 + WTERMSIG(status) : -1;
+  const fs::path tmp = capture_dir();
+  r.out = slurp((tmp / (tag + ".out")).string());
+  r.err = slurp((tmp / (tag + ".err")).string());
   return r;
+}
+
+Result ehpt_argv(const std::vector<std::string>& args, const std::vector<std::string>& env = {}) {
+  return wait_ehpt(spawn_ehpt(args, "run", -1, env), "run");
+}
+
+// Space-separated arguments (none of the paths used with it contain spaces).
+Result ehpt(const std::string& args) {
+  std::vector<std::string> v;
+  std::istringstream in(args);
+  for (std::string a; in >> a;) v.push_back(a);
+  return ehpt_argv(v);
 }
 
 void replace_once(std::string& s, const std::string& from, const std::string& to) {
   const auto at = s.find(from);
   ASSERT_NE(at, std::string::npos) << from;
   s.replace(at, from.size(), to);
+}
+
+bool have_matplotlib() {
+  pid_t pid = -1;
+  char python[] = "/usr/bin/python3", flag[] = "-c", code[] = "import matplotlib, numpy";
+  char* argv[] = {python, flag, code, nullptr};
+  if (posix_spawn(&pid, python, nullptr, nullptr, argv, environ) != 0) return false;
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) && WEXITSTATUS(status) == 0;
 }
 
 // A scratch copy of the MBEV vehicle and a scenario using it, with one line replaced.
@@ -109,7 +178,70 @@ TEST_F(BadInput, NanValue) {
 
 TEST_F(BadInput, NonMonotonicCycleAxis) {
   replace(cycle_, "24.17,0", "4.17,0");
-  EXPECT_HAS(run().err, file("cycle.csv") + ":5: driver.cycle[3] = 4.17: axis must be non-decreasing (previous value 17.22)");
+  EXPECT_HAS(run().err, file("cycle.csv") +
+                            ":5: driver.cycle, column time_s = 4.17: axis must be non-decreasing (previous value 17.22)");
+}
+
+TEST_F(BadInput, CycleValuesAreReportedAsWrittenWithTheirRow) {
+  replace(cycle_, "5.39,20", "5.39,-20");  // km/h: the message must not show -5.56 (m/s)
+  EXPECT_HAS(run().err, file("cycle.csv") +
+                            ":3: driver.cycle, column speed_kmh = -20: speed must be >= 0 and below 200 m/s (720 km/h)");
+}
+
+TEST_F(BadInput, QuotedNumbersAndAByteOrderMarkAreRead) {
+  // as a spreadsheet exports it; then one bad quoted field, named as written
+  cycle_ = "\xEF\xBB\xBF\"time_s\",\"speed_kmh\"\r\n\"0\",\"0\"\r\n\"5.39\",\"20\"\r\n\"17.22\",\"2O\"\r\n";
+  EXPECT_HAS(run().err, file("cycle.csv") + ":4: column speed_kmh: \"2O\" is not a number");
+}
+
+TEST_F(BadInput, MapAxisSizeIsPlacedAtTheMapFile) {
+  map_ = "torque_pu,speed_pu,efficiency\n0,0,0.9\n0,1,0.9\n";  // one row-axis value
+  replace(vehicle_, ehpt::test::source_path("data/maps/map_evmaps_eff.csv"), "map.csv");
+  EXPECT_HAS(run().err, file("map.csv") + ": drive.efficiency_map = 1 value on the row axis: a map needs at least 2 "
+                                          "values on each axis");
+}
+
+TEST_F(BadInput, MissingVehicleFileIsReportedAtTheKeyThatNamesIt) {
+  std::ofstream(dir_ / "scenario2.toml") << "description = \"x\"\nvehicle_file = \"nope.toml\"\n";
+  const Result r = ehpt("run " + file("scenario2.toml") + " --out " + file("out"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_HAS(r.err, file("scenario2.toml") + ":2: vehicle_file = \"nope.toml\": cannot read " + file("nope.toml") +
+                        ": no such file");
+}
+
+TEST_F(BadInput, InputFilesThatAreNotRegularFilesAreRefusedWithoutHanging) {
+  ASSERT_EQ(mkfifo(file("fifo.csv").c_str(), 0644), 0);
+  cycle_name_ = "fifo.csv";
+  EXPECT_HAS(run().err, "cycle = \"fifo.csv\": cannot read " + file("fifo.csv") + ": is a FIFO, not a regular file");
+  cycle_name_ = "/dev/urandom";
+  EXPECT_HAS(run().err, "cycle = \"/dev/urandom\": cannot read /dev/urandom: is a device, not a regular file");
+  replace(vehicle_, "efficiency_map = \"" + ehpt::test::source_path("data/maps/map_evmaps_eff.csv") + "\"",
+          "efficiency_map = \"/dev/zero\"");
+  cycle_name_ = "cycle.csv";
+  EXPECT_HAS(run().err, "drive.efficiency_map = \"/dev/zero\": cannot read /dev/zero: is a device");
+  // as the scenario itself
+  const Result r = ehpt("run " + file("fifo.csv"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_HAS(r.err, "fifo.csv: is a FIFO, not a scenario file");
+}
+
+TEST_F(BadInput, AnOverLongOrUnreadablePathIsAMessageNotAnAbort) {
+  const Result r = ehpt_argv({"run", std::string(5000, 'a')});
+  EXPECT_EQ(r.exit_code, 2);  // was 134: an uncaught std::filesystem_error
+  EXPECT_HAS(r.err, "... (5000 characters): File name too long");
+  const Result deep = ehpt_argv({"run", "/proc/self/fd/999/x.toml"});
+  EXPECT_EQ(deep.exit_code, 2);
+}
+
+TEST_F(BadInput, AHugeInputFileIsRefusedBeforeItIsRead) {
+  {
+    std::ofstream big(file("big.csv"));
+    big << "time_s,speed_kmh\n";
+    const std::string row(1 << 20, '#');  // comment lines: 65 MiB in 65 writes
+    for (int i = 0; i < 65; ++i) big << row << "\n";
+  }
+  cycle_name_ = "big.csv";
+  EXPECT_HAS(run().err, "bytes, more than the limit of 67108864 bytes for an input file");
 }
 
 TEST_F(BadInput, TextInNumberColumn) {
@@ -120,7 +252,7 @@ TEST_F(BadInput, TextInNumberColumn) {
 TEST_F(BadInput, EfficiencyOutsideZeroOne) {
   replace(map_, "0.5,0.5,0.83", "0.5,0.5,1.3");
   replace(vehicle_, ehpt::test::source_path("data/maps/map_evmaps_eff.csv"), "map.csv");
-  EXPECT_HAS(run().err, file("map.csv") + ": drive.efficiency_map = 1.3: efficiency must be in (0, 1]");
+  EXPECT_HAS(run().err, file("map.csv") + ":14: drive.efficiency_map, column efficiency = 1.3: efficiency must be in (0, 1]");
 }
 
 TEST_F(BadInput, EmptyCycle) {
@@ -130,7 +262,8 @@ TEST_F(BadInput, EmptyCycle) {
 
 TEST_F(BadInput, MissingFile) {
   cycle_name_ = "no_such_cycle.csv";
-  EXPECT_HAS(run().err, file("no_such_cycle.csv") + ": cannot open file (missing or unreadable)");
+  EXPECT_HAS(run().err, file("scenario.toml") + ":3: cycle = \"no_such_cycle.csv\": cannot read " +
+                            file("no_such_cycle.csv") + ": no such file");
 }
 
 TEST_F(BadInput, EveryProblemIsListedAtOnce) {
@@ -177,7 +310,8 @@ class BadPsdInput : public ::testing::Test {
 
 TEST_F(BadPsdInput, NegativeSfc) {
   replace_once(files_["map_psd_ice_sfc.csv"], "50,300,265", "50,300,-265");
-  EXPECT_HAS(run().err, file("map_psd_ice_sfc.csv") + ": ice.sfc_map = -265: specific consumption must be > 0 g/kWh");
+  EXPECT_HAS(run().err, file("map_psd_ice_sfc.csv") +
+                            ":24: ice.sfc_map, column sfc_g_per_kWh = -265: specific consumption must be > 0 g/kWh");
 }
 
 TEST_F(BadPsdInput, RingSunRatioNotAboveOne) {
@@ -193,7 +327,7 @@ TEST_F(BadPsdInput, HysteresisThresholdsInTheWrongOrder) {
 TEST_F(BadPsdInput, TorqueCurveWithNonMonotonicSpeedAxis) {
   replace_once(files_["map_psd_ice_max_torque.csv"], "300,92", "150,92");
   EXPECT_HAS(run().err, file("map_psd_ice_max_torque.csv") +
-                            ":4: ice.torque_max[2] = 150: axis must be strictly increasing (previous value 200)");
+                            ":4: ice.torque_max, column speed_rad_s = 150: axis must be strictly increasing (previous value 200)");
 }
 
 TEST_F(BadPsdInput, UnknownEcuKind) {
@@ -242,13 +376,14 @@ TEST(Cli, RunTimeFaultKeepsOutputsAndExitsNonZero) {
 
 TEST(Cli, WarnsAboutTheLimiterQuirkOfTheTwoFlangeTest) {
   const fs::path out = fs::temp_directory_path() / "ehpt_cli_warn";
+  fs::remove_all(out);
   const Result r = ehpt("run " + ehpt::test::source_path("scenarios/two_flange_test.toml") + " --out " + out.string());
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_HAS(r.err, "test_mb_two_flange.toml:12: drive.speed_max_rad_s = 300: below power_max_W / torque_max_Nm");
 }
 
 TEST(Cli, PlotWritesTheFigures) {
-  if (std::system("/usr/bin/python3 -c 'import matplotlib, numpy' >/dev/null 2>&1") != 0) {
+  if (!have_matplotlib()) {
     GTEST_SKIP() << "/usr/bin/python3 with matplotlib and numpy is not installed (tools/setup.sh installs it)";
   }
   const fs::path out = fs::temp_directory_path() / "ehpt_cli_plot";
@@ -260,6 +395,7 @@ TEST(Cli, PlotWritesTheFigures) {
     EXPECT_GT(fs::file_size(out / png), 10000u) << png;
   }
   const fs::path hybrid = fs::temp_directory_path() / "ehpt_cli_plot_hybrid";
+  fs::remove_all(hybrid);
   ASSERT_EQ(ehpt("run " + ehpt::test::source_path("scenarios/psecu2_nedc.toml") +
                  " --set solver.duration_s=60 --quiet --plot --out " + hybrid.string())
                 .exit_code,
@@ -267,6 +403,7 @@ TEST(Cli, PlotWritesTheFigures) {
   EXPECT_GT(fs::file_size(hybrid / "hybrid.png"), 10000u);
   EXPECT_GT(fs::file_size(hybrid / "hybrid_power.png"), 10000u);
   const fs::path rig = fs::temp_directory_path() / "ehpt_cli_plot_rig";
+  fs::remove_all(rig);
   ASSERT_EQ(ehpt("run " + ehpt::test::source_path("scenarios/one_flange_test.toml") + " --quiet --out " + rig.string())
                 .exit_code,
             0);
@@ -294,6 +431,216 @@ TEST(Cli, HelpListAndSignals) {
   EXPECT_HAS(sig.out, "genTauRef_Nm");
   EXPECT_EQ(ehpt("frobnicate").exit_code, 1);
   EXPECT_EQ(ehpt("run no_such_scenario_name").exit_code, 2);
+}
+
+// ---- output folders, the plot tool, signals and streams (issue 6) --------------------
+
+fs::path fresh(const std::string& name) {
+  const fs::path p = fs::temp_directory_path() / ("ehpt_cli6_" + name);
+  fs::remove_all(p);
+  fs::create_directories(p);
+  return p;
+}
+
+// Waits (bounded) until path exists: the child has started its run.
+bool wait_for(const fs::path& path, double seconds = 20.0) {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  while (std::chrono::steady_clock::now() < until) {
+    if (fs::exists(path)) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return false;
+}
+
+// ~2 s of work on this machine: long enough to be interrupted or raced.
+const std::vector<std::string> kLongRun = {"--set", "solver.step_s=0.0001", "--set", "output.interval_s=1"};
+
+TEST(CliOutputs, AProjectFolderThatHoldsASummaryIsNeverReplaced) {
+  const fs::path root = fresh("project");
+  const fs::path project = root / "project";
+  fs::create_directories(project / "src");
+  std::ofstream(project / "src/main.c") << "int main() {}";
+  std::ofstream(project / "README.txt") << "mine";
+  std::ofstream(project / "summary.json") << "{}";
+  const Result r = ehpt_argv({"run", ehpt::test::source_path("scenarios/ev_sort1.toml"), "--out", project.string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_HAS(r.err, "is not an earlier ehpt run (no ehpt-manifest.txt (no such file); it holds files ehpt did not "
+                    "write: README.txt, src/, summary.json)");
+  EXPECT_EQ(slurp((project / "src/main.c").string()), "int main() {}");
+  EXPECT_EQ(slurp((project / "summary.json").string()), "{}");
+  EXPECT_EQ(std::distance(fs::directory_iterator(root), fs::directory_iterator()), 1);  // nothing of ours left
+}
+
+TEST(CliOutputs, TheUsersPartialAndReplacedPathsAreNeverTouched) {
+  const fs::path root = fresh("user_paths");
+  const std::string out = (root / "run").string();
+  fs::create_directories(out + ".partial");
+  std::ofstream(out + ".partial/data.csv") << "mine";
+  std::ofstream(out + ".replaced") << "mine too";
+  const std::string sc = ehpt::test::source_path("scenarios/ev_sort1.toml");
+  ASSERT_EQ(ehpt_argv({"run", sc, "--quiet", "--out", out}).exit_code, 0);
+  ASSERT_EQ(ehpt_argv({"run", sc, "--quiet", "--out", out}).exit_code, 0);  // replaces the first
+  EXPECT_EQ(slurp(out + ".partial/data.csv"), "mine");
+  EXPECT_EQ(slurp(out + ".replaced"), "mine too");
+  EXPECT_HAS(slurp(out + "/ehpt-manifest.txt"), "summary.json\ntimeseries.csv\n");
+}
+
+TEST(CliOutputs, TwoRunsOnOneFolderCannotMix) {
+  const fs::path root = fresh("race");
+  const std::string out = (root / "run").string();
+  // A: a long EV run; B: the drive rig, started while A runs, must stop at once
+  std::vector<std::string> a_args = {"run", ehpt::test::source_path("scenarios/ev_nedc.toml"), "--quiet", "--out", out};
+  a_args.insert(a_args.end(), kLongRun.begin(), kLongRun.end());
+  const pid_t a = spawn_ehpt(a_args, "a");
+  ASSERT_TRUE(wait_for(out + ".ehpt-lock"));
+  const Result b = ehpt_argv({"run", ehpt::test::source_path("scenarios/one_flange_test.toml"), "--out", out});
+  const Result ra = wait_ehpt(a, "a");
+  EXPECT_EQ(b.exit_code, 1);
+  EXPECT_HAS(b.err, "another ehpt run is writing this folder");
+  EXPECT_EQ(ra.exit_code, 0) << ra.err;
+  // the committed folder is A's, whole: its summary and its timeseries
+  EXPECT_HAS(slurp(out + "/summary.json"), "\"scenario\": \"ev_nedc\"");
+  EXPECT_EQ(slurp(out + "/timeseries.csv").rfind("time_s,speed_ref_m_s,", 0), 0u);
+  EXPECT_FALSE(fs::exists(out + ".ehpt-lock"));
+  for (const auto& e : fs::directory_iterator(root)) {
+    EXPECT_EQ(e.path().filename().string().find("partial"), std::string::npos) << e.path();
+  }
+}
+
+TEST(CliOutputs, PlotRunsWithoutAShellWhateverTheFolderIsCalled) {
+  if (!have_matplotlib()) GTEST_SKIP() << "/usr/bin/python3 with matplotlib and numpy is not installed";
+  const fs::path root = fresh("quote");
+  const fs::path pwned = root / "PWNED";
+  // with a shell this name ran `touch PWNED`
+  const std::string out = (root / ("it's a run'; touch " + pwned.string() + "; echo '")).string();
+  const Result r = ehpt_argv({"run", ehpt::test::source_path("scenarios/one_flange_test.toml"), "--quiet", "--plot",
+                              "--out", out});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(out + "/torque.png"));
+  const Result p = ehpt_argv({"plot", out});
+  EXPECT_EQ(p.exit_code, 0) << p.err;
+  EXPECT_HAS(p.out, "wrote " + out + "/torque.png");
+  EXPECT_FALSE(fs::exists(pwned));
+  // the figures are in the manifest, so the folder is still an earlier run that may be replaced
+  EXPECT_HAS(slurp(out + "/ehpt-manifest.txt"), "torque.png\n");
+  EXPECT_EQ(ehpt_argv({"run", ehpt::test::source_path("scenarios/one_flange_test.toml"), "--quiet", "--out", out})
+                .exit_code,
+            0);
+  EXPECT_FALSE(fs::exists(out + "/torque.png"));  // listed, hence removed with the earlier run
+}
+
+TEST(CliOutputs, AFailedPlotIsANonZeroExitAndKeepsTheRun) {
+  const fs::path root = fresh("plotfail");
+  fs::create_directories(root / "tools");
+  std::ofstream(root / "tools/plot.py") << "import sys\nsys.exit(3)\n";
+  const std::string out = (root / "run").string();
+  const Result r = ehpt_argv({"run", ehpt::test::source_path("scenarios/one_flange_test.toml"), "--quiet", "--plot",
+                              "--out", out},
+                             {"EHPT_TOOLS_DIR=" + (root / "tools").string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_HAS(r.err, "plotting failed (the plot tool exited with 3)");
+  EXPECT_TRUE(fs::exists(out + "/timeseries.csv"));
+  EXPECT_EQ(ehpt_argv({"plot", out}, {"EHPT_TOOLS_DIR=" + (root / "tools").string()}).exit_code, 1);
+  // a user's file of a figure's name is never overwritten by `ehpt plot`
+  if (have_matplotlib()) {
+    const fs::path mine = root / "mine";
+    fs::create_directories(mine);
+    fs::copy_file(out + "/timeseries.csv", mine / "timeseries.csv");
+    std::ofstream(mine / "torque.png") << "my own figure";
+    const Result p = ehpt_argv({"plot", mine.string()});
+    EXPECT_EQ(p.exit_code, 1);
+    EXPECT_HAS(p.err, "torque.png: exists and is not a figure ehpt made");
+    EXPECT_EQ(slurp((mine / "torque.png").string()), "my own figure");
+    EXPECT_TRUE(fs::exists(mine / "efficiency.png"));
+  }
+}
+
+TEST(CliOutputs, SigtermAndSighupStopCleanlyWithTheirExitCodes) {
+  for (const auto& [sig, code, name] : {std::tuple{SIGTERM, 143, "SIGTERM"}, std::tuple{SIGHUP, 129, "SIGHUP"},
+                                        std::tuple{SIGINT, 130, "SIGINT"}}) {
+    const fs::path root = fresh(std::string("signal_") + name);
+    const std::string out = (root / "run").string();
+    std::vector<std::string> args = {"run", ehpt::test::source_path("scenarios/ev_nedc.toml"), "--quiet", "--out", out};
+    args.insert(args.end(), kLongRun.begin(), kLongRun.end());
+    const pid_t pid = spawn_ehpt(args, name);
+    ASSERT_TRUE(wait_for(out + ".ehpt-lock"));
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    kill(pid, sig);
+    const Result r = wait_ehpt(pid, name);
+    EXPECT_EQ(r.exit_code, code) << name << r.err;
+    const std::string summary = slurp(out + "/summary.json");
+    EXPECT_HAS(summary, "\"status\": \"interrupted\"");
+    EXPECT_HAS(summary, std::string("\"interrupted_by\": \"") + name + "\"");
+    EXPECT_GT(fs::file_size(out + "/timeseries.csv"), 100u);
+  }
+}
+
+TEST(CliOutputs, AFailedStdoutWriteIsReportedAndAClosedPipeIsNot141) {
+  const fs::path root = fresh("stdout");
+  const std::string sc = ehpt::test::source_path("scenarios/ev_sort1.toml");
+  const int full = open("/dev/full", O_WRONLY);
+  ASSERT_GE(full, 0);
+  Result r = wait_ehpt(spawn_ehpt({"run", sc, "--out", (root / "a").string()}, "full", full), "full");
+  close(full);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_HAS(r.err, "cannot write to standard output: No space left on device");
+  EXPECT_TRUE(fs::exists(root / "a/summary.json"));  // the run itself was committed
+  int pipe_fds[2];
+  ASSERT_EQ(pipe(pipe_fds), 0);
+  close(pipe_fds[0]);  // nobody reads: like `ehpt run ... | head -0`
+  r = wait_ehpt(spawn_ehpt({"run", sc, "--out", (root / "b").string()}, "pipe", pipe_fds[1]), "pipe");
+  close(pipe_fds[1]);
+  EXPECT_EQ(r.exit_code, 1);  // was 141 (killed by SIGPIPE after the commit)
+  EXPECT_HAS(r.err, "cannot write to standard output: Broken pipe");
+  EXPECT_TRUE(fs::exists(root / "b/summary.json"));
+}
+
+TEST(CliOutputs, AnEnergyAuditThatDoesNotCloseIsFlagged) {
+  const fs::path root = fresh("audit");
+  const Result r = ehpt_argv({"run", ehpt::test::source_path("scenarios/ev_sort1.toml"), "--set", "solver.step_s=1",
+                              "--out", (root / "run").string()});
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_HAS(r.err, "warning: the energy audit does not close: relative residual 0.303 > 0.001");
+  EXPECT_HAS(r.err, "the step may be too coarse for the dynamics (solver.step_s = 1 s");
+  const std::string summary = slurp((root / "run/summary.json").string());
+  EXPECT_HAS(summary, "\"energy_balance_ok\": false");
+  EXPECT_HAS(summary, "the energy audit does not close");
+  const Result ok = ehpt_argv({"run", ehpt::test::source_path("scenarios/ev_sort1.toml"), "--out", (root / "ok").string()});
+  EXPECT_EQ(ok.err.find("energy audit"), std::string::npos) << ok.err;
+  EXPECT_HAS(slurp((root / "ok/summary.json").string()), "\"energy_balance_ok\": true");
+}
+
+TEST(CliOutputs, OutOfMemoryIsOneLineAndExitOne) {
+  // a cycle that fits the size bound but not in 300 MB of address space once parsed
+  const fs::path root = fresh("oom");
+  {
+    std::ofstream big(root / "big.csv");
+    big << "time_s,speed_kmh\n";
+    std::string chunk;
+    for (int i = 0; i < 100000; ++i) chunk += "1,1\n";
+    for (int i = 0; i < 150; ++i) big << chunk;  // 15e6 rows, 60 MB
+  }
+  std::ofstream(root / "s.toml") << "vehicle_file = \"" << ehpt::test::source_path("vehicles/mbev.toml")
+                                 << "\"\ncycle = \"big.csv\"\n";
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    const rlimit lim{300u << 20, 300u << 20};
+    setrlimit(RLIMIT_AS, &lim);
+    const int err = open((root / "err").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(err, STDERR_FILENO);
+    execl(EHPT_BINARY, EHPT_BINARY, "run", (root / "s.toml").c_str(), "--out", (root / "run").c_str(), nullptr);
+    _exit(127);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status);  // was: abort (134)
+  EXPECT_EQ(WEXITSTATUS(status), 1);
+  EXPECT_HAS(slurp((root / "err").string()), "error: out of memory");
+  EXPECT_FALSE(fs::exists(root / "run"));
+  for (const auto& e : fs::directory_iterator(root)) {
+    EXPECT_EQ(e.path().filename().string().find("run."), std::string::npos) << e.path();
+  }
 }
 
 }  // namespace
