@@ -158,21 +158,24 @@ TEST(PaperPsecu2OnNedc, FollowsHoldsSocSwitchesTheEngineAndBalancesEnergy) {
         dist = y.distance_m;
       },
       &audit);
-  // §5.4: starts OFF (P_add(0) = 2.5 kW), first switch-on at ~337 s in the re-simulation
-  EXPECT_NEAR(first_on_s, 337.0, 5.0);
+  // starts OFF (P_add(0) = 2.5 kW, §5.4); with the drives' losses the battery drains faster
+  // than in the eta = 1 set-up of §5.4 (first switch-on ~337 s, tested below), so the SOC
+  // loop starts the engine at 145.5 s
+  EXPECT_NEAR(first_on_s, 145.5, 1.0);
   // the gen's reaction on the ring peaks at 181 N against a 178.5 N break-away force (the
   // re-simulation of §4.3 saw 172 N with an engine that gives torque while OFF): the car
   // creeps back by a fraction of a millimetre, then is held again before the cycle starts
   EXPECT_LT(creep_m, 1e-3);
   EXPECT_TRUE(locked_at_11s);
   EXPECT_EQ(st.chattering_steps, 0);
-  EXPECT_EQ(st.ice_starts, 4);  // 336.8, 532.2, 727.5, 827.8 s
+  EXPECT_EQ(st.ice_starts, 5);  // 145.5, 334.7, 526.8, 721.0, 822.8 s
   // stated limits: the library's driver (k = 1 per m/s, 80 N m per unit) lags in the
   // accelerations by up to ~5.5 km/h; its request saturates at 1.8 per unit in the final
-  // 120 -> 0 km/h braking, where the car falls up to ~11 km/h behind
+  // 120 -> 0 km/h braking, where the engine, still ON, pushes on the ring and the car falls
+  // up to ~16 km/h behind (the friction brake supplies only what mot cannot)
   EXPECT_LT(std::sqrt(sq / samples), 2.5);
   EXPECT_LT(max_err_urban, 6.0);
-  EXPECT_LT(max_err, 12.0);
+  EXPECT_LT(max_err, 17.0);
   EXPECT_NEAR(dist, 10983.0, 0.01 * 10983.0);
   EXPECT_LT(std::abs(soc_end - 0.6), 0.05);
   EXPECT_LE(std::abs(audit.residual_J), 1e-6 * audit.scale_J);
@@ -187,6 +190,47 @@ TEST(PaperPsecu2OnNedc, FollowsHoldsSocSwitchesTheEngineAndBalancesEnergy) {
   const double avg_sfc_g_kWh = fuel_J / p.ice.fuel_lhv_J_kg * 1e3 / (work_J / 3.6e6);
   EXPECT_GT(avg_sfc_g_kWh, 228.0);
   EXPECT_LT(avg_sfc_g_kWh, 270.0);
+}
+
+// The example source's set-up (gen and mot at eta = 1, MODELS.md §10.4 table): the
+// re-simulation of §5.4 switches the engine on first at ~337 s.
+TEST(PaperPsecu2OnNedc, TheSourceSetUpStartsTheEngineAt337s) {
+  const PsdParams p = psecu("psecu2_source_nedc.toml");
+  EXPECT_EQ(p.gen.loss_model, DriveLossModel::kIdeal);
+  EXPECT_EQ(p.mot.loss_model, DriveLossModel::kIdeal);
+  double first_on_s = -1.0;
+  const hil::RunStats st = drive(p, 1400.0, [&](std::int64_t, double t, const auto&, const auto&, const auto& y) {
+    if (first_on_s < 0.0 && y.iceON != 0.0) first_on_s = t;
+  });
+  EXPECT_NEAR(first_on_s, 337.0, 1.0);
+  EXPECT_EQ(st.ice_starts, 4);  // 336.8, 532.2, 727.5, 827.8 s
+}
+
+// The library tutorial's published figures on NEDC at t = 1250 s: fuel 0.356 kg for the
+// ON/OFF hybrid (ehpt psecu2), 0.449 kg for the always-on one with SOC loop (psecu1soc), a
+// saving of more than 20 %, with both cars ending near the same SOC as the tutorial says was
+// intended. They need the drives' efficiency maps (the vehicles' default); at eta = 1 the
+// same cars give 279 g and 384 g. And without a SOC loop (MBecu1) the SOC shifts by a
+// "non-negligible" amount (tutorial, MODELS.md §5.2).
+TEST(TutorialFigures, PowerSplitFuelAt1250sOnNedc) {
+  struct End {
+    double fuel_kg = 0.0, soc = 0.0;
+  };
+  const auto run = [](const char* scenario) {
+    End e;
+    drive(psecu(scenario), 1250.0, [&](std::int64_t, double, const auto&, const auto&, const auto& y) {
+      e.fuel_kg = y.fuel_g / 1000.0;
+      e.soc = y.soc;
+    });
+    return e;
+  };
+  const End on_off = run("psecu2_nedc.toml"), always_on = run("psecu1soc_nedc.toml"), no_loop = run("psecu1_nedc.toml");
+  EXPECT_NEAR(on_off.fuel_kg, 0.356, 0.02 * 0.356);      // ehpt: 0.3582
+  EXPECT_NEAR(always_on.fuel_kg, 0.449, 0.02 * 0.449);   // ehpt: 0.4536
+  EXPECT_GT(1.0 - on_off.fuel_kg / always_on.fuel_kg, 0.20);  // ehpt: 21.0 %
+  EXPECT_NEAR(on_off.soc, always_on.soc, 0.005);         // ehpt: 0.6040 and 0.6061
+  EXPECT_NEAR(on_off.soc, 0.6, 0.01);
+  EXPECT_GT(std::abs(no_loop.soc - 0.6), 0.1);           // ehpt: 0.6 -> 0.411
 }
 
 TEST(PaperPsecu2OnNedc, OnOffEngineUsesAtLeast20PercentLessFuelThanAlwaysOn) {
