@@ -285,7 +285,8 @@ class BadPsdInput : public ::testing::Test {
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     vehicle_ = slurp(ehpt::test::source_path("vehicles/psecu2.toml"));
-    for (const char* map : {"map_psd_ice_max_torque.csv", "map_psd_ice_sfc.csv", "ecu_psd_power_to_ice_speed.csv"}) {
+    for (const char* map : {"map_psd_ice_max_torque.csv", "map_psd_ice_sfc.csv", "ecu_psd_power_to_ice_speed.csv",
+                            "map_psd_gen_eff.csv", "map_psd_mot_eff.csv"}) {
       files_[map] = slurp(ehpt::test::source_path(std::string("data/maps/") + map));
       replace_once(vehicle_, std::string("../data/maps/") + map, map);
     }
@@ -321,7 +322,7 @@ TEST_F(BadPsdInput, RingSunRatioNotAboveOne) {
 
 TEST_F(BadPsdInput, HysteresisThresholdsInTheWrongOrder) {
   replace_once(vehicle_, "off_threshold_W = 5000.0", "off_threshold_W = 9000.0");
-  EXPECT_HAS(run().err, file("vehicle.toml") + ":76: ecu.off_threshold_W = 9000: must be < on_threshold_W = 7000");
+  EXPECT_HAS(run().err, file("vehicle.toml") + ":80: ecu.off_threshold_W = 9000: must be < on_threshold_W = 7000");
 }
 
 TEST_F(BadPsdInput, TorqueCurveWithNonMonotonicSpeedAxis) {
