@@ -219,9 +219,13 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
     s += buf;
   }
   if constexpr (requires { y0.soc; }) {
-    std::snprintf(buf, sizeof buf, "battery       %.1f Wh out, %.1f Wh/km, SOC %.4f -> %.4f\n",
-                  audit.battery_out_J / 3600.0,
-                  distance_m > 0 ? audit.battery_out_J / 3600.0 / (distance_m / 1000.0) : 0.0, y0.soc, y1.soc);
+    if (distance_m > 0.0) {
+      std::snprintf(buf, sizeof buf, "battery       %.1f Wh out, %.1f Wh/km, SOC %.4f -> %.4f\n",
+                    audit.battery_out_J / 3600.0, audit.battery_out_J / 3600.0 / (distance_m / 1000.0), y0.soc, y1.soc);
+    } else {  // a rig: no distance
+      std::snprintf(buf, sizeof buf, "battery       %.1f Wh out, SOC %.4f -> %.4f\n", audit.battery_out_J / 3600.0,
+                    y0.soc, y1.soc);
+    }
     s += buf;
   }
   if (st.has_ice) {

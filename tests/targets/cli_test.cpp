@@ -20,6 +20,8 @@
 #include <thread>
 #include <tuple>
 
+#include "io/csv_table.hpp"
+#include "plant/battery_rig.hpp"
 #include "test_plants.hpp"
 
 extern char** environ;
@@ -642,6 +644,53 @@ TEST(CliOutputs, OutOfMemoryIsOneLineAndExitOne) {
   for (const auto& e : fs::directory_iterator(root)) {
     EXPECT_EQ(e.path().filename().string().find("run."), std::string::npos) << e.path();
   }
+}
+
+// The battery rig through the binary: a constant-current discharge against its closed form
+// (MODELS.md §6.1): E = E0 - I (1 + k) t / C_batt, v_rc = R1 I (1 + k) (1 - exp(-t / (R1 C1))).
+TEST(CliBatteryRig, ConstantCurrentDischargeFollowsTheClosedForm) {
+  const fs::path root = fresh("battery_rig");
+  const std::string scenario = ehpt::test::source_path("scenarios/battery_cc_discharge.toml");
+  const Result r = ehpt_argv({"run", scenario, "--quiet", "--out", (root / "run").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto sc = ehpt::test::load(scenario);
+  const auto& rig = std::get<ehpt::plant::BatteryRigParams>(sc.plant);
+  const ehpt::plant::BatteryRcConstants k = ehpt::plant::derive(rig.battery);
+  ASSERT_EQ(rig.profile[0].kind, ehpt::plant::BatterySegment::Kind::kCurrent);
+  const double current_A = rig.profile[0].value, end_s = rig.profile[0].duration_s;
+  ASSERT_EQ(current_A, 100.0);
+  ehpt::io::CsvTable t;
+  std::vector<std::string> errors;
+  ASSERT_TRUE(ehpt::io::read_csv_table((root / "run/timeseries.csv").string(), t, errors));
+  const auto col = [&](const char* name) {
+    const int c = t.column_index(name);
+    EXPECT_GE(c, 0) << name;
+    return t.columns[static_cast<std::size_t>(std::max(c, 0))];
+  };
+  const auto time = col("time_s"), emf = col("battery_emf_V"), vrc = col("battery_vrc_V"), v = col("battery_voltage_V");
+  const auto i = col("battery_current_A"), soc = col("soc");
+  const double i_m = current_A * (1.0 + k.k_parasitic), tau_s = k.r1_Ohm * k.c1_F;
+  std::size_t checked = 0;
+  for (std::size_t row = 0; row < t.rows() && time[row] < end_s; ++row) {
+    const double s = time[row];
+    const double e = k.emf_initial_V - i_m * s / k.c_batt_F;
+    const double v_rc = k.r1_Ohm * i_m * (1.0 - std::exp(-s / tau_s));
+    ASSERT_NEAR(emf[row], e, 1e-9 * e) << s;
+    ASSERT_NEAR(vrc[row], v_rc, 1e-9) << s;
+    ASSERT_NEAR(v[row], e - v_rc - k.r0_Ohm * current_A, 1e-9 * e) << s;
+    ASSERT_EQ(i[row], current_A) << s;
+    ASSERT_NEAR(soc[row], (e - k.emf_min_V) / (k.emf_max_V - k.emf_min_V), 1e-9) << s;
+    ++checked;
+  }
+  EXPECT_EQ(checked, 1800u);
+  // then the rest: E frozen, the RC block relaxes with tau = 60 s
+  const std::size_t rest = 1800, later = 1860;
+  ASSERT_EQ(time[later], 1860.0);
+  EXPECT_EQ(i[rest], 0.0);
+  EXPECT_EQ(emf[later], emf[rest]);
+  EXPECT_NEAR(vrc[later], vrc[rest] * std::exp(-60.0 / tau_s), 1e-9);
+  const std::string summary = slurp((root / "run/summary.json").string());
+  EXPECT_HAS(summary, "\"energy_balance_ok\": true");
 }
 
 }  // namespace
