@@ -10,6 +10,7 @@
 
 #include <toml++/toml.h>
 
+#include "hil/toml_guard.hpp"
 #include "io/csv_table.hpp"
 #include "io/number_format.hpp"
 #include "io/text_file.hpp"
@@ -263,6 +264,11 @@ bool parse_toml(const std::string& path, toml::table& out, Context& ctx, const F
     }
     return false;
   }
+  if (const int line = line_of_overlong_key(content); line != 0) {
+    ctx.errors.push_back(path + ":" + std::to_string(line) + ": a key with more than " +
+                         std::to_string(kMaxDottedKeyParts) + " dotted parts");
+    return false;
+  }
   try {
     out = toml::parse(content, path);
     return true;
@@ -292,7 +298,11 @@ bool parse_override(const std::string& text, toml::table& out, Context& ctx) {
   }
   const std::string key = text.substr(0, eq);
   const std::string value = text.substr(eq + 1);
-  const std::string label = "--set " + text;
+  const std::string label = "--set " + (text.size() <= 200 ? text : text.substr(0, 80) + "...");
+  if (line_of_overlong_key(key + " =") != 0 || line_of_overlong_key(value) != 0) {
+    ctx.errors.push_back(label + ": a key with more than " + std::to_string(kMaxDottedKeyParts) + " dotted parts");
+    return false;
+  }
   try {
     out = toml::parse(key + " = " + value, label);
   } catch (const toml::parse_error&) {

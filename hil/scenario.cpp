@@ -7,6 +7,7 @@
 
 #include <toml++/toml.h>
 
+#include "hil/toml_guard.hpp"
 #include "io/text_file.hpp"
 
 namespace fs = std::filesystem;
@@ -53,6 +54,8 @@ std::vector<ScenarioEntry> list_scenarios(const std::string& dir) {
     std::string text, reason;
     if (!io::read_text_file(p.string(), text, reason)) {
       s.description = "(cannot read: " + reason + ")";
+    } else if (line_of_overlong_key(text) != 0) {
+      s.description = "(cannot parse)";
     } else {
       try {
         const toml::table t = toml::parse(text, p.string());

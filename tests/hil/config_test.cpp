@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
+
+#include "hil/toml_guard.hpp"
 
 #include "hil/scenario.hpp"
 #include "test_plants.hpp"
@@ -162,6 +165,34 @@ TEST(Config, RoadFormCanBeSwitchedWithSetAndTheOtherKeysAreIgnoredWithAWarning) 
   EXPECT_EQ(ignored, 4) << (sc.warnings.empty() ? "" : sc.warnings[0]);  // fc, rho, S, Cx of mbev.toml
   // the coast-down keys are still required
   EXPECT_EQ(problems_with({"vehicle.road.form=coast-down"}, sc).size(), 2u);
+}
+
+// Found by tests/fuzz: toml++ recurses once per dotted-key part, so a 62 kB key overflowed
+// the stack (SIGSEGV). Such keys are refused before toml++ sees them.
+TEST(Config, AKeyWithThousandsOfDottedPartsIsRefusedNotACrash) {
+  std::string deep = "a";
+  for (int i = 0; i < 50000; ++i) deep += ".b";
+  Scenario sc;
+  const auto errors = problems_with({deep + "=1"}, sc);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("a key with more than 64 dotted parts"), std::string::npos) << errors[0].substr(0, 200);
+  const auto dir = std::filesystem::temp_directory_path() / "ehpt_config_deep_key";
+  std::filesystem::create_directories(dir);
+  const std::string vehicle = (dir / "v.toml").string(), scenario = (dir / "s.toml").string();
+  std::ofstream(vehicle) << "kind = \"bev\"\n[" << deep << "]\nx = 1\n";
+  std::ofstream(scenario) << "vehicle_file = \"v.toml\"\ncycle = \"" << test::source_path("data/cycles/cycle_sort1.csv")
+                          << "\"\n";
+  std::vector<std::string> errs;
+  EXPECT_FALSE(load_scenario(scenario, {}, sc, errs));
+  ASSERT_EQ(errs.size(), 1u);
+  EXPECT_EQ(errs[0], vehicle + ":2: a key with more than 64 dotted parts");
+  // ordinary files: dotted keys of a few parts, floats in multi-line arrays
+  EXPECT_EQ(line_of_overlong_key("a.b.c = 1\n[x.y]\nv = [\n 1.5, 2.5, 3.5, 4.5, 5.5, 6.5, 7.5, 8.5, 9.5, 1.5, 2.5, "
+                                 "3.5, 4.5, 5.5, 6.5, 7.5, 8.5, 9.5, 1.5, 2.5, 3.5, 4.5, 5.5, 6.5, 7.5, 8.5, 9.5, 1.5, "
+                                 "2.5, 3.5, 4.5, 5.5, 6.5, 7.5, 8.5, 9.5, 1.5, 2.5, 3.5, 4.5, 5.5, 6.5, 7.5, 8.5, 9.5, "
+                                 "1.5, 2.5, 3.5, 4.5, 5.5, 6.5, 7.5, 8.5, 9.5, 1.5, 2.5, 3.5, 4.5, 5.5, 6.5, 7.5, 8.5, "
+                                 "9.5, 1.5, 2.5, 3.5, 4.5]\n"),
+            0);
 }
 
 }  // namespace
