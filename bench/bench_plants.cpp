@@ -74,8 +74,10 @@ BENCHMARK(BM_BevRun<solvers::ImplicitEuler<plant::BevPlant>>)
 
 // The paper's PSecu2 on NEDC with MBecu2 every step (h = 1 ms): one step = ECU update (with
 // the plant's sensing) + one advance(); and the whole 1400 s run through the runner.
-void BM_Psecu2Step(benchmark::State& state) {
-  const hil::Scenario sc = load("psecu2_nedc.toml");
+// /maps: the default (gen and mot on efficiency maps); /eta1: the example source's set-up
+// without drive losses, the workload these benchmarks measured before the maps were default.
+void BM_Psecu2Step(benchmark::State& state, const char* scenario) {
+  const hil::Scenario sc = load(scenario);
   const auto& p = std::get<plant::PsdParams>(sc.plant);
   const plant::PsdPlant plant(p);
   plant::PsdEcu ecu(p.ecu, 1e-3);
@@ -99,10 +101,11 @@ void BM_Psecu2Step(benchmark::State& state) {
   }
   set_step_counters(state, static_cast<double>(state.iterations()));
 }
-BENCHMARK(BM_Psecu2Step);
+BENCHMARK_CAPTURE(BM_Psecu2Step, maps, "psecu2_nedc.toml");
+BENCHMARK_CAPTURE(BM_Psecu2Step, eta1, "psecu2_source_nedc.toml");
 
-void BM_Psecu2Run_nedc(benchmark::State& state) {
-  const hil::Scenario sc = load("psecu2_nedc.toml");
+void BM_Psecu2Run_nedc(benchmark::State& state, const char* scenario) {
+  const hil::Scenario sc = load(scenario);
   const auto& p = std::get<plant::PsdParams>(sc.plant);
   const plant::PsdPlant plant(p);
   std::int64_t steps = 0;
@@ -116,7 +119,8 @@ void BM_Psecu2Run_nedc(benchmark::State& state) {
   }
   set_step_counters(state, static_cast<double>(steps));
 }
-BENCHMARK(BM_Psecu2Run_nedc)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Psecu2Run_nedc, maps, "psecu2_nedc.toml")->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Psecu2Run_nedc, eta1, "psecu2_source_nedc.toml")->Unit(benchmark::kMillisecond);
 
 void BM_OneFlangeStep(benchmark::State& state) {
   const hil::Scenario sc = load("one_flange_test.toml");
