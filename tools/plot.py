@@ -123,7 +123,7 @@ class Plotter:
     def save(self, fig, name):
         """Write DIR/name via a temporary file so no half-written PNG appears."""
         for ax in fig.axes:
-            if ax.get_legend_handles_labels()[0]:
+            if ax.get_legend_handles_labels()[0] and ax.get_legend() is None:
                 ax.legend(loc="best", fontsize="small")
         fig.tight_layout()
         target = os.path.join(self.dir, name)
@@ -240,6 +240,10 @@ class Plotter:
                         ax2.set_yticks([0, 1])
                         ax2.set_ylim(-0.1, 1.6)
                         ax2.set_ylabel("ON")
+                        # headroom above both curves for the legend, in one row at the top
+                        top = float(np.nanmax(c["iceW_rad_s"])) if len(t) else 1.0
+                        ax.set_ylim(top=1.45 * top if top > 0 else 1.0)
+                        ax2.legend(loc="upper left", ncol=2, fontsize="small")
                 else:
                     ax.plot(t, c["soc"], color="tab:green", label="SOC")
                     ax.set_ylabel("SOC")
