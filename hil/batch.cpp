@@ -176,6 +176,11 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
   }
   j.number("battery_energy_J", audit.battery_out_J);
   j.number("battery_Wh_per_km", distance_m > 0.0 ? audit.battery_out_J / 3600.0 / (distance_m / 1000.0) : NAN);
+  // what left the EMF (terminal energy + battery losses): tracks the SOC drop, and is what
+  // the library tutorial reports as Wh/km (MODELS.md §10.3)
+  j.number("battery_emf_Wh_per_km", distance_m > 0.0 ? (audit.battery_out_J + audit.battery_loss_J) / 3600.0 /
+                                                          (distance_m / 1000.0)
+                                                    : NAN);
   if constexpr (requires { y0.soc; }) {
     j.number("soc_start", y0.soc);
     j.number("soc_end", y1.soc);

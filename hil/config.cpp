@@ -341,8 +341,9 @@ void keep_source(const std::string& field, const io::CsvTable& t, const std::vec
   ctx.failed_tables.erase(field);
 }
 
-// Cycle: time_s and speed_kmh or speed_m_s; other columns ignored.
-plant::Table1d load_cycle(const FileRef& ref, const std::string& field, Context& ctx) {
+// Cycle: time_s and speed_kmh or speed_m_s; other columns ignored. After its last row the
+// last speed is held, or the cycle repeats (periodic).
+plant::Table1d load_cycle(const FileRef& ref, const std::string& field, bool periodic, Context& ctx) {
   io::CsvTable t;
   if (!read_table(ref, field, t, ctx)) return {};
   const int ti = t.column_index("time_s");
@@ -362,8 +363,8 @@ plant::Table1d load_cycle(const FileRef& ref, const std::string& field, Context&
   std::vector<double> v = t.columns[static_cast<std::size_t>(vi)];
   for (double& s : v) s *= scale;
   keep_source(field, t, {ti, vi}, ctx);
-  // end value held: a cycle does not extrapolate past its last row
-  return plant::Table1d(t.columns[static_cast<std::size_t>(ti)], std::move(v), plant::Extrapolation::kHold);
+  return plant::Table1d(t.columns[static_cast<std::size_t>(ti)], std::move(v),
+                        periodic ? plant::Extrapolation::kPeriodic : plant::Extrapolation::kHold);
 }
 
 plant::Table1d load_curve(const FileRef& ref, const std::string& field, Context& ctx) {
@@ -541,6 +542,7 @@ plant::BrakeParams read_brake(Reader r) {
   plant::BrakeParams b;
   b.enabled = r.flag("enabled", b.enabled);
   b.library_gain = r.flag("library_gain", b.library_gain);
+  b.after_rotor_inertia = r.flag("after_rotor_inertia", b.after_rotor_inertia);
   r.finish();
   return b;
 }
@@ -607,7 +609,7 @@ plant::PsdEcuParams read_ecu(Reader r, Context& ctx) {
   return p;
 }
 
-plant::PsdParams read_psd(Reader& root, const FileRef& cycle, Context& ctx) {
+plant::PsdParams read_psd(Reader& root, const FileRef& cycle, bool periodic, Context& ctx) {
   plant::PsdParams p;
   p.body = read_body(root.sub("vehicle"));
   p.road = read_road(root.sub("road"), ctx);
@@ -623,11 +625,11 @@ plant::PsdParams read_psd(Reader& root, const FileRef& cycle, Context& ctx) {
     r.finish();
   }
   p.ecu = read_ecu(root.sub("ecu"), ctx);
-  if (!cycle.empty()) p.driver.cycle_m_s = load_cycle(cycle, "driver.cycle", ctx);
+  if (!cycle.empty()) p.driver.cycle_m_s = load_cycle(cycle, "driver.cycle", periodic, ctx);
   return p;
 }
 
-plant::BevParams read_bev(Reader& root, const FileRef& cycle, Context& ctx) {
+plant::BevParams read_bev(Reader& root, const FileRef& cycle, bool periodic, Context& ctx) {
   plant::BevParams p;
   p.body = read_body(root.sub("vehicle"));
   p.road = read_road(root.sub("road"), ctx);
@@ -635,7 +637,7 @@ plant::BevParams read_bev(Reader& root, const FileRef& cycle, Context& ctx) {
   p.battery = read_battery(root.sub("battery"));
   p.driver = read_driver(root.sub("driver"));
   p.brake = read_brake(root.sub("brake"));
-  if (!cycle.empty()) p.driver.cycle_m_s = load_cycle(cycle, "driver.cycle", ctx);
+  if (!cycle.empty()) p.driver.cycle_m_s = load_cycle(cycle, "driver.cycle", periodic, ctx);
   return p;
 }
 
@@ -765,6 +767,8 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
   out.description = sc.text("description", "");
   const FileRef vehicle_ref = sc.path("vehicle_file", true);
   const FileRef cycle_ref = sc.path("cycle", false);
+  // repeat the cycle to fill solver.duration_s, as the library's EV examples do
+  const bool cycle_periodic = sc.flag("cycle_periodic", false);
   out.vehicle_path = vehicle_ref.path;
   out.cycle_path = cycle_ref.path;
   bool has_interval = false, has_decimation = false;
@@ -837,7 +841,7 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
   std::optional<double> ecu_period_s;  // vehicles with a built-in ECU
   if (kind == "bev") {
     need_cycle();
-    plant::BevParams p = read_bev(vr, cycle_ref, ctx);
+    plant::BevParams p = read_bev(vr, cycle_ref, cycle_periodic, ctx);
     vr.finish();
     if (!p.driver.cycle_m_s.empty()) default_duration(p.driver.cycle_m_s.x().back());
     plant::validate(p, problems);
@@ -846,7 +850,7 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
     out.plant = std::move(p);
   } else if (kind == "psd") {
     need_cycle();
-    plant::PsdParams p = read_psd(vr, cycle_ref, ctx);
+    plant::PsdParams p = read_psd(vr, cycle_ref, cycle_periodic, ctx);
     vr.finish();
     if (!p.driver.cycle_m_s.empty()) default_duration(p.driver.cycle_m_s.x().back());
     plant::validate(p, problems);

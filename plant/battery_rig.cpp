@@ -116,6 +116,7 @@ EnergyAudit BatteryRig::audit(const State& x0, const State& x) const {
   // a discharge followed by a charge can leave every net term small: the largest one is the scale
   a.scale_J = std::max({std::abs(stored_out_J), std::abs(out_J), std::abs(losses_J)});
   a.battery_out_J = out_J;
+  a.battery_loss_J = losses_J;
   a.residual_J = stored_out_J - (out_J + losses_J);
   a.terms = {{"battery_stored_out_J", stored_out_J},
              {"battery_terminal_out_J", out_J},

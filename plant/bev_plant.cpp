@@ -18,6 +18,16 @@ void validate(const BevParams& p, Problems& problems) {
   validate(p.drive, "drive", problems);
   validate(p.battery, "battery", problems);
   validate(p.driver, "driver", problems);
+  if (p.brake.enabled && p.brake.after_rotor_inertia && p.body.mass_kg > 0.0 && p.body.wheel_radius_m > 0.0) {
+    // the loop must have one solution: the brake's share of the inertia below the mass
+    const double g_over_r = p.body.gear_ratio / p.body.wheel_radius_m;
+    const double share_kg = brake_gain_N_per_Nm(p.brake, p.body) * p.drive.inertia_kgm2 * g_over_r;
+    if (!(share_kg < p.body.mass_kg)) {
+      problems.add("brake.after_rotor_inertia", "true",
+                   "the brake gain times the reflected rotor inertia (" + number_text(share_kg) +
+                       " kg) must be below vehicle.mass_kg");
+    }
+  }
 }
 
 const std::array<Signal<BevPlant::Outputs>, 30> BevPlant::kSignals = {{
@@ -73,6 +83,7 @@ BevPlant::BevPlant(const BevParams& params)
   mass_eff_kg_ = p_.body.mass_kg + p_.drive.inertia_kgm2 * g_over_r_ * g_over_r_;
   inv_mass_eff_kg_ = 1.0 / mass_eff_kg_;
   brake_gain_ = brake_gain_N_per_Nm(p_.brake, p_.body);
+  if (p_.brake.after_rotor_inertia) brake_inertia_kg_ = brake_gain_ * p_.drive.inertia_kgm2 * g_over_r_;
 }
 
 BevPlant::State BevPlant::initial_state() const {
@@ -99,18 +110,28 @@ BevPlant::Modes BevPlant::initial_modes(const State& x0) const {
   const double rolling_N = road_.rolling_N(grade_rad);
   const double speed_force_N = road_.speed_force_N(v);
   const double unmet_braking_Nm = op.torque_Nm - driver.request;
-  const double brake_N = unmet_braking_Nm > 0.0 ? brake_gain_ * unmet_braking_Nm : 0.0;
+  double brake_N = unmet_braking_Nm > 0.0 ? brake_gain_ * unmet_braking_Nm : 0.0;
   const double tractive_N = op.torque_Nm * g_over_r_;
   const double applied_N = tractive_N - road_.grade_force_N(grade_rad);
   // stuck: the road reacts with the applied force, no acceleration; moving: road load and
-  // brake oppose the motion
+  // brake oppose the motion (d = +1 forward, -1 backward)
   double road_N = applied_N, accel_m_s2 = 0.0;
-  if (m.motion == Motion::kForward) {
-    road_N = rolling_N + speed_force_N;
-    accel_m_s2 = (applied_N - road_N - brake_N) * inv_mass_eff_kg_;
-  } else if (m.motion == Motion::kBackward) {
-    road_N = -rolling_N + speed_force_N;
-    accel_m_s2 = (applied_N - road_N + brake_N) * inv_mass_eff_kg_;
+  if (m.motion != Motion::kStuck) {
+    const double d = m.motion == Motion::kForward ? 1.0 : -1.0;
+    road_N = d * rolling_N + speed_force_N;
+    accel_m_s2 = (applied_N - road_N - d * brake_N) * inv_mass_eff_kg_;
+    if (brake_inertia_kg_ > 0.0) {
+      // MBEV's brake signal: max(0, unmet - J (G/r) a). Without the brake, a0 above; if the
+      // signal is positive there, the active branch m_eff a = F - d k (unmet - J (G/r) a) holds
+      const double signal_N = brake_gain_ * unmet_braking_Nm - brake_inertia_kg_ * ((applied_N - road_N) * inv_mass_eff_kg_);
+      if (signal_N > 0.0) {
+        accel_m_s2 = (applied_N - road_N - d * brake_gain_ * unmet_braking_Nm) / (mass_eff_kg_ - d * brake_inertia_kg_);
+        brake_N = brake_gain_ * unmet_braking_Nm - brake_inertia_kg_ * accel_m_s2;
+      } else {
+        brake_N = 0.0;
+        accel_m_s2 = (applied_N - road_N) * inv_mass_eff_kg_;
+      }
+    }
   }
   // the battery supplies the drive's DC power
   return Eval{.driver = driver,
@@ -222,6 +243,7 @@ EnergyAudit BevPlant::audit(const State& x0, const State& x) const {
   a.sources_J = stored_out_J;
   a.scale_J = std::abs(stored_out_J);
   a.battery_out_J = delta(kBatteryOutJ);
+  a.battery_loss_J = delta(kBatteryLossJ);
   a.residual_J = stored_out_J - (delta(kRoadJ) + delta(kDriveLossJ) + delta(kBatteryLossJ) + delta(kBrakeJ) +
                                  kinetic_J + potential_J);
   a.terms = {{"battery_stored_out_J", stored_out_J},   {"battery_terminal_out_J", delta(kBatteryOutJ)},

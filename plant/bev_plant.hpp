@@ -6,7 +6,10 @@
 //   driver:   tau_req = clamp(k (v_ref(t) - v), -yMax, yMax)            (N m at the drive shaft)
 //   drive:    w = v G / r;  tau = clamp(tau_req, -tau_lim(w), tau_lim(w));  P_dc from the map
 //   brake:    the braking the drive cannot deliver: F_brake = (G / r) max(0, tau - tau_req),
-//             opposing motion (MBEV's gain G*r is a source defect, §10.3; flag brake_library_gain)
+//             opposing motion (MBEV's gain G*r is a source defect, §10.3; flag brake_library_gain).
+//             brake.after_rotor_inertia: MBEV's signal, max(0, tau - J dw/dt - tau_req); with
+//             dw/dt = (G/r) dv/dt this is an algebraic loop, linear on each branch, solved
+//             exactly (unique while the gain times J (G/r) is below the effective mass)
 //   battery:  supplies P_dc (constant-power load on the RC pack)
 //   body:     (m + J (G/r)^2) dv/dt = tau G/r - F_roll - F_v(v) - m g sin(alpha) - F_brake
 //             ds/dt = v,  dh/dt = v sin(alpha)
@@ -48,6 +51,10 @@ void validate(const VehicleBodyParams& p, const std::string& at, Problems& probl
 struct BrakeParams {
   bool enabled = true;
   bool library_gain = false;  // reproduce MBEV's G*r gain instead of G/r (source defect)
+  // MBEV measures the torque for its brake after the rotor inertia: tau_shaft = tau - J dw/dt,
+  // so it also brakes J dw/dt in every deceleration (§10.3, correction of 2026-11-22). Off:
+  // the applied torque tau (no algebraic loop; differs by ~0.2 % Wh/km on NEDC).
+  bool after_rotor_inertia = false;
 };
 
 // Wheel force per N m of unmet braking torque at the drive shaft: G / r, or the MBEV's
@@ -127,6 +134,7 @@ class BevPlant {
   double mass_eff_kg_ = 0.0;     // vehicle + rotor reflected
   double inv_mass_eff_kg_ = 0.0;
   double brake_gain_ = 0.0;      // N per N m of unmet braking torque
+  double brake_inertia_kg_ = 0.0;  // after_rotor_inertia: brake_gain * J * G/r (0 otherwise)
 };
 
 }  // namespace ehpt::plant

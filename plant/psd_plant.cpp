@@ -17,6 +17,9 @@ void validate(const PsdParams& p, Problems& problems) {
                  "must be > 1 (the ring has more teeth than the sun)");
   }
   validate(p.ecu, "ecu", problems);
+  if (p.brake.after_rotor_inertia) {
+    problems.add("brake.after_rotor_inertia", "true", "only the map-based EV (kind = \"bev\") has this option");
+  }
 }
 
 const std::array<Signal<PsdPlant::Outputs>, 35> PsdPlant::kSignals = {{
@@ -266,6 +269,7 @@ EnergyAudit PsdPlant::audit(const State& x0, const State& x) const {
   a.sources_J = fuel_J + stored_out_J;
   a.scale_J = std::abs(ice_work_J) + std::abs(stored_out_J);
   a.battery_out_J = delta(kBatteryOutJ);
+  a.battery_loss_J = delta(kBatteryLossJ);
   // engine losses = fuel energy - engine work, so the fuel term cancels and the residual
   // checks the mechanical and electrical integration
   a.residual_J = fuel_J + stored_out_J -

@@ -35,7 +35,8 @@ struct EnergyAudit {
   // what the residual is relative to: the energy that actually flowed through the balance
   // (a term that appears on both sides, like fuel energy in a hybrid, is left out)
   double scale_J = 0.0;
-  double battery_out_J = 0.0;  // net out of the battery terminals (0 without a battery)
+  double battery_out_J = 0.0;   // net out of the battery terminals (0 without a battery)
+  double battery_loss_J = 0.0;  // battery losses; out + losses = what left the EMF (SOC drop)
   std::vector<std::pair<std::string, double>> terms;
 };
 

@@ -4,13 +4,15 @@
 //   Table1d: piecewise linear in x. A repeated x value is a zero-length segment (a step);
 //            at such a point the table is right-continuous (takes the later row), so no
 //            division by a zero interval can happen (NEDC has 31 repeated time stamps).
-//            Outside the axis: linear from the last two points, or hold the end value.
+//            Outside the axis: linear from the last two points, hold the end value, or
+//            repeat the table (periodic, as the library's EV examples drive their cycle).
 //   Table2d: bilinear on a rectangular grid, u1 = row axis, u2 = column axis; outside
 //            the grid, linear from the last two grid lines (P15..V2 behaviour, §1.4).
 //
 // Tables are built and validated at start-up; lookups allocate nothing and never search:
 // they run inside every derivative evaluation.
 
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -62,7 +64,7 @@ class AxisIndex {
   std::vector<std::uint32_t> bucket_;  // non-uniform: first segment that can hold a u of bucket k
 };
 
-enum class Extrapolation { kLinear, kHold };
+enum class Extrapolation { kLinear, kHold, kPeriodic };
 
 class Table1d {
  public:
@@ -74,6 +76,12 @@ class Table1d {
     if (extrapolation_ == Extrapolation::kHold) {
       if (u <= x_.front()) return y_.front();
       if (u >= x_.back()) return y_.back();
+    } else if (extrapolation_ == Extrapolation::kPeriodic && (u < x_.front() || u >= x_.back())) {
+      // period = the axis span; u = x_end starts the next period (the first row applies)
+      const double span = x_.back() - x_.front();
+      double k = std::fmod(u - x_.front(), span);
+      if (k < 0.0) k += span;
+      u = x_.front() + k;
     }
     const AxisIndex::Position p = index_.locate(u);
     return y_[p.i] + p.t * (y_[p.i + 1] - y_[p.i]);

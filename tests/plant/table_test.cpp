@@ -83,4 +83,17 @@ TEST(Table2d, BilinearIsExactForBilinearFunctionsAndExtrapolatesLinearly) {
 }
 
 }  // namespace
+TEST(Table1d, PeriodicRepeatsTheTableOverItsSpan) {
+  // a cycle of 10 s: 0 -> 10 m/s at 5 s -> 0 at 10 s
+  const Table1d t({0.0, 5.0, 10.0}, {0.0, 10.0, 0.0}, Extrapolation::kPeriodic);
+  EXPECT_EQ(t(2.5), 5.0);
+  EXPECT_EQ(t(10.0), 0.0);   // the end starts the next period
+  EXPECT_EQ(t(12.5), 5.0);
+  EXPECT_EQ(t(25.0), 10.0);
+  EXPECT_NEAR(t(1e6 + 7.5), 5.0, 1e-9);
+  EXPECT_EQ(t(-2.5), 5.0);   // before the start: the previous period
+  const Table1d hold({0.0, 5.0, 10.0}, {0.0, 10.0, 2.0}, Extrapolation::kHold);
+  EXPECT_EQ(hold(12.5), 2.0);
+}
+
 }  // namespace ehpt::plant

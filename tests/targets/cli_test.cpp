@@ -693,4 +693,39 @@ TEST(CliBatteryRig, ConstantCurrentDischargeFollowsTheClosedForm) {
   EXPECT_HAS(summary, "\"energy_balance_ok\": true");
 }
 
+// Energy per km in summary.json against the last row of timeseries.csv (an independent
+// computation): terminal energy, and EMF-side energy (terminal + battery losses), the figure
+// the library tutorial reports (116 Wh/km for MBEV on NEDC).
+TEST(CliSummary, WhPerKmAgreesWithTheTimeseries) {
+  const fs::path root = fresh("wh_per_km");
+  const Result r = ehpt_argv({"run", ehpt::test::source_path("scenarios/ev_tutorial_nedc.toml"), "--quiet", "--out",
+                              (root / "run").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ehpt::io::CsvTable t;
+  std::vector<std::string> errors;
+  ASSERT_TRUE(ehpt::io::read_csv_table((root / "run/timeseries.csv").string(), t, errors));
+  const auto last = [&](const char* name) {
+    const int c = t.column_index(name);
+    EXPECT_GE(c, 0) << name;
+    return t.columns[static_cast<std::size_t>(std::max(c, 0))].back();
+  };
+  EXPECT_EQ(last("time_s"), 1400.0);  // NEDC repeated to 1400 s
+  const double km = last("distance_m") / 1000.0;
+  const double terminal = last("battery_out_J") / 3600.0 / km;
+  const double emf = (last("battery_out_J") + last("battery_loss_J")) / 3600.0 / km;
+  const std::string summary = slurp((root / "run/summary.json").string());
+  const auto value = [&](const std::string& key) {
+    const std::smatch m = [&] {
+      std::smatch found;
+      std::regex_search(summary, found, std::regex("\"" + key + "\": ([-0-9.e+]+)"));
+      return found;
+    }();
+    EXPECT_FALSE(m.empty()) << key;
+    return m.empty() ? NAN : std::stod(m[1].str());
+  };
+  EXPECT_NEAR(value("battery_Wh_per_km"), terminal, 1e-9 * terminal);
+  EXPECT_NEAR(value("battery_emf_Wh_per_km"), emf, 1e-9 * emf);
+  EXPECT_NEAR(emf, 116.0, 0.5);
+}
+
 }  // namespace
