@@ -18,17 +18,7 @@ esac
 
 # clang's libFuzzer runtime is in libclang-rt-14-dev on Debian 12; the rest is what the build needs
 packages=(cmake make clang libclang-rt-14-dev libeigen3-dev libgtest-dev libtomlplusplus-dev)
-missing=()
-for p in "${packages[@]}"; do
-  dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  echo "ehpt fuzz: installing ${missing[*]}" >&2
-  sudo_cmd=()
-  [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
-  "${sudo_cmd[@]}" apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq "${missing[@]}" >/dev/null
-fi
+"$here/tools/apt_install.sh" "ehpt fuzz" "${packages[@]}"
 
 build="$here/build-fuzz"
 mkdir -p "$build"

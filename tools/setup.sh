@@ -8,17 +8,7 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 packages=(cmake make g++ libeigen3-dev libgtest-dev libbenchmark-dev libtomlplusplus-dev
           python3-matplotlib python3-numpy)
 
-missing=()
-for p in "${packages[@]}"; do
-  dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  echo "ehpt setup: installing ${missing[*]}" >&2
-  sudo_cmd=()
-  [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
-  "${sudo_cmd[@]}" apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq "${missing[@]}" >/dev/null
-fi
+"$here/tools/apt_install.sh" "ehpt setup" "${packages[@]}"
 
 cmake -S "$here" -B "$here/build" -DCMAKE_BUILD_TYPE=Release ${EHPT_CMAKE_ARGS:-} >/dev/null
 cmake --build "$here/build" -j"$(nproc)"

@@ -15,6 +15,7 @@
 #include <system_error>
 #include <vector>
 
+#include "fuzz_checks.hpp"
 #include "io/csv_table.hpp"
 
 namespace {
@@ -56,21 +57,8 @@ void write_file(const std::string& path, const std::uint8_t* data, std::size_t s
   }
 }
 
-// EHPT_FUZZ_VERBOSE=1 prints each answer: to see what the loader made of a saved input.
-void report(bool ok, const std::vector<std::string>& errors) {
-  static const bool verbose = std::getenv("EHPT_FUZZ_VERBOSE") != nullptr;
-  if (!verbose) return;
-  std::fprintf(stderr, "%s: %s, %zu messages\n", "csv_fuzz", ok ? "accepted" : "rejected", errors.size());
-  for (const std::string& e : errors) std::fprintf(stderr, "  %s\n", e.c_str());
-}
-
-// The header's contract, checked on every input: a broken promise is a finding like a crash.
-void require(bool condition, const char* what) {
-  if (!condition) {
-    std::fprintf(stderr, "csv_fuzz: contract broken: %s\n", what);
-    std::abort();
-  }
-}
+void report(bool ok, const std::vector<std::string>& errors) { ehpt::fuzz::report("csv_fuzz", ok, errors); }
+void require(bool condition, const char* what) { ehpt::fuzz::require("csv_fuzz", condition, what); }
 
 }  // namespace
 

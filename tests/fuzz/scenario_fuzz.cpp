@@ -25,6 +25,7 @@
 #include <system_error>
 #include <vector>
 
+#include "fuzz_checks.hpp"
 #include "hil/config.hpp"
 
 namespace {
@@ -113,21 +114,8 @@ class Workspace {
   fs::path root_;
 };
 
-// EHPT_FUZZ_VERBOSE=1 prints each answer: to see what the loader made of a saved input.
-void report(bool ok, const std::vector<std::string>& errors) {
-  static const bool verbose = std::getenv("EHPT_FUZZ_VERBOSE") != nullptr;
-  if (!verbose) return;
-  std::fprintf(stderr, "%s: %s, %zu messages\n", "scenario_fuzz", ok ? "accepted" : "rejected", errors.size());
-  for (const std::string& e : errors) std::fprintf(stderr, "  %s\n", e.c_str());
-}
-
-// The header's contract, checked on every input: a broken promise is a finding like a crash.
-void require(bool condition, const char* what) {
-  if (!condition) {
-    std::fprintf(stderr, "scenario_fuzz: contract broken: %s\n", what);
-    std::abort();
-  }
-}
+void report(bool ok, const std::vector<std::string>& errors) { ehpt::fuzz::report("scenario_fuzz", ok, errors); }
+void require(bool condition, const char* what) { ehpt::fuzz::require("scenario_fuzz", condition, what); }
 
 void load_and_check(const fs::path& scenario, const std::vector<std::string>& overrides) {
   ehpt::hil::Scenario sc;
