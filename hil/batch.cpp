@@ -58,6 +58,12 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
     }
   }
 
+  // a signal while loading: nothing was run, and an earlier run in DIR stays as it is
+  if (opt.stop_signal != nullptr && opt.stop_signal->load() != 0) {
+    log << "interrupted by " << signal_name(opt.stop_signal->load()) << " before the run started; nothing was run\n";
+    res.exit_code = 128 + opt.stop_signal->load();
+    return res;
+  }
   io::OutputDir dir;
   std::string error;
   if (!dir.open(opt.out_dir, error)) {
@@ -103,7 +109,7 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
                     runner.time_s(), sc.solver.duration_s);
       log << buf << std::flush;
     }
-    if (runner.finished()) break;
+    if (runner.finished() || !csv_error.empty()) break;  // a write error ends the run: its rows are lost
     if (opt.stop_signal != nullptr && opt.stop_signal->load() != 0) {
       interrupted_by = opt.stop_signal->load();
       break;
@@ -263,10 +269,12 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
     return res;
   }
   if (opt.before_commit && !opt.before_commit(dir.partial_dir())) res.after_failed = true;
-  if (!dir.commit(error)) {
+  // an interrupted run never replaces a complete earlier one: it stays in its own folder
+  if (!dir.commit(error, interrupted_by == 0)) {
     log << "error: " << error << "\n";
     res.exit_code = 1;
   }
+  res.results_dir = dir.results_dir();
   for (const std::string& w : dir.warnings()) res.warnings.push_back(w);
   return res;
 }

@@ -37,6 +37,9 @@ struct BatchResult {
   std::string summary_text;          // human-readable lines for the terminal
   std::vector<std::string> warnings; // for the terminal: "warning: ..."
   bool after_failed = false;         // before_commit returned false
+  std::string results_dir;           // where the outputs are: the --out folder, or (an
+                                     // interrupted run that did not replace an earlier one)
+                                     // its temporary folder
 };
 
 BatchResult run_batch(const Scenario& scenario, const BatchOptions& options, std::ostream& log);

@@ -29,6 +29,8 @@ std::string node_text(const toml::node& n) {
   std::ostringstream s;
   if (n.is_table()) return "(a table)";
   if (n.is_array()) return "(an array)";
+  // floats as the shortest text that reads back (toml++ prints 2.2 as 2.2000000000000002)
+  if (const auto d = n.value_exact<double>()) return io::number_text(*d);
   n.visit([&](const auto& v) { s << v; });
   return s.str();
 }
@@ -87,8 +89,14 @@ struct Context {
 // the scenario's [vehicle] table, the vehicle file). Unknown keys in any layer are errors.
 class Reader {
  public:
-  Reader(std::vector<const toml::table*> layers, std::string prefix, std::string file, Context& ctx)
-      : layers_(std::move(layers)), prefix_(std::move(prefix)), file_(std::move(file)), ctx_(ctx) {}
+  // where: the location of this table (for keys that are missing from it), default the file
+  Reader(std::vector<const toml::table*> layers, std::string prefix, std::string file, Context& ctx,
+         std::string where = "")
+      : layers_(std::move(layers)), prefix_(std::move(prefix)), file_(std::move(file)), ctx_(ctx),
+        where_(where.empty() ? file_ : std::move(where)) {}
+
+  const std::string& name() const { return prefix_; }
+  const std::string& where() const { return where_; }
 
   std::string field(std::string_view key) const { return prefix_.empty() ? std::string(key) : prefix_ + "." + std::string(key); }
 
@@ -104,11 +112,13 @@ class Reader {
     ctx_.where[field(key)] = file_ + " (default)";
     return nullptr;
   }
-  bool has(std::string_view key) const {
-    for (const toml::table* t : layers_) {
-      if (t != nullptr && t->get(key) != nullptr) return true;
+  bool has(std::string_view key) const { return layer_of(key) >= 0; }
+  // The layer that gives key (0 is the highest: the last --set), -1 if none does.
+  int layer_of(std::string_view key) const {
+    for (std::size_t i = 0; i < layers_.size(); ++i) {
+      if (layers_[i] != nullptr && layers_[i]->get(key) != nullptr) return static_cast<int>(i);
     }
-    return false;
+    return -1;
   }
 
   std::optional<double> opt_number(std::string_view key) {
@@ -121,7 +131,7 @@ class Reader {
   double number(std::string_view key, double fallback) { return opt_number(key).value_or(fallback); }
   double required_number(std::string_view key) {
     if (!has(key)) {
-      ctx_.error(file_, field(key), "", "missing (required number)");
+      ctx_.error(where_, field(key), "", "missing (required number)");
       find(key);
       return std::nan("");
     }
@@ -163,7 +173,7 @@ class Reader {
   FileRef path(std::string_view key, bool required) {
     const toml::node* n = find(key);
     if (n == nullptr) {
-      if (required) ctx_.error(file_, field(key), "", "missing (required file name)");
+      if (required) ctx_.error(where_, field(key), "", "missing (required file name)");
       return {};
     }
     auto v = n->value_exact<std::string>();
@@ -211,7 +221,8 @@ class Reader {
       const toml::node& e = *a->get(i);
       const std::string name = field(key) + "[" + std::to_string(i) + "]";
       if (const toml::table* t = e.as_table()) {
-        out.emplace_back(std::vector<const toml::table*>{t}, name, file_, ctx_);
+        ctx_.where[name] = location(&e, file_);
+        out.emplace_back(std::vector<const toml::table*>{t}, name, file_, ctx_, location(&e, file_));
       } else {
         ctx_.error(location(&e, file_), name, node_text(e), "must be a table");
       }
@@ -222,6 +233,7 @@ class Reader {
   Reader sub(std::string_view key) {
     used_.insert(std::string(key));
     std::vector<const toml::table*> layers;
+    std::string where;  // the lowest layer's table: usually the vehicle file's [table] line
     for (const toml::table* t : layers_) {
       const toml::node* n = t == nullptr ? nullptr : t->get(key);
       if (n != nullptr && !n->is_table()) {
@@ -229,8 +241,9 @@ class Reader {
         n = nullptr;
       }
       layers.push_back(n == nullptr ? nullptr : n->as_table());
+      if (n != nullptr) where = location(n, file_);
     }
-    return Reader(std::move(layers), field(key), file_, ctx_);
+    return Reader(std::move(layers), field(key), file_, ctx_, where.empty() ? where_ : where);
   }
 
   // Reports every key no reader asked for.
@@ -249,6 +262,7 @@ class Reader {
   std::vector<const toml::table*> layers_;
   std::string prefix_, file_;
   Context& ctx_;
+  std::string where_;
   std::set<std::string> used_;
 };
 
@@ -264,9 +278,9 @@ bool parse_toml(const std::string& path, toml::table& out, Context& ctx, const F
     }
     return false;
   }
-  if (const int line = line_of_overlong_key(content); line != 0) {
-    ctx.errors.push_back(path + ":" + std::to_string(line) + ": a key with more than " +
-                         std::to_string(kMaxDottedKeyParts) + " dotted parts");
+  if (const int line = line_with_too_many_dots(content); line != 0) {
+    ctx.errors.push_back(path + ":" + std::to_string(line) + ": more than " + std::to_string(kMaxDotsPerLine) +
+                         " dots on one line (a dotted key that long would overflow the TOML parser)");
     return false;
   }
   try {
@@ -299,8 +313,9 @@ bool parse_override(const std::string& text, toml::table& out, Context& ctx) {
   const std::string key = text.substr(0, eq);
   const std::string value = text.substr(eq + 1);
   const std::string label = "--set " + (text.size() <= 200 ? text : text.substr(0, 80) + "...");
-  if (line_of_overlong_key(key + " =") != 0 || line_of_overlong_key(value) != 0) {
-    ctx.errors.push_back(label + ": a key with more than " + std::to_string(kMaxDottedKeyParts) + " dotted parts");
+  if (line_with_too_many_dots(text) != 0) {
+    ctx.errors.push_back(label + ": more than " + std::to_string(kMaxDotsPerLine) +
+                         " dots on one line (a dotted key that long would overflow the TOML parser)");
     return false;
   }
   try {
@@ -512,6 +527,9 @@ plant::RoadLoadParams read_road(Reader r, Context& ctx) {
   } else {
     ctx.error(ctx.where[r.field("form")], r.field("form"), "\"" + form + "\"",
               "must be \"coefficients\" or \"coast-down\"");
+    // the keys of both forms are known: no follow-on "unknown key"
+    for (std::string_view key : kCoefficientKeys) r.find(key);
+    for (std::string_view key : kCoastDownKeys) r.find(key);
   }
   const FileRef slope = r.path("slope_table", false);
   if (!slope.empty()) p.slope_rad = load_curve(slope, r.field("slope"), ctx);
@@ -681,8 +699,7 @@ plant::BatteryRigParams read_battery_rig(Reader& root, Context& ctx) {
     plant::BatterySegment s;
     const bool current = r.has("current_A"), power = r.has("power_W");
     if (current == power) {
-      ctx.error(ctx.where.count(r.field("duration_s")) ? ctx.where[r.field("duration_s")] : r.field(""),
-                r.field("current_A"), "", "give either current_A or power_W (> 0 discharge, < 0 charge)");
+      ctx.error(r.where(), r.name(), "", "give either current_A or power_W (> 0 discharge, < 0 charge)");
     }
     s.kind = power ? plant::BatterySegment::Kind::kPower : plant::BatterySegment::Kind::kCurrent;
     s.value = power ? r.number("power_W", 0.0) : r.number("current_A", 0.0);
@@ -793,14 +810,24 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
   {
     Reader r = sc.sub("output");
     out.output.signals = r.strings("signals");
-    has_interval = r.has("interval_s");
-    has_decimation = r.has("decimation");
+    const int interval_layer = r.layer_of("interval_s"), decimation_layer = r.layer_of("decimation");
+    has_interval = interval_layer >= 0;
+    has_decimation = decimation_layer >= 0;
     interval_s = r.number("interval_s", interval_s);
     out.output.decimation = r.integer("decimation", 1);
-    if (has_interval && has_decimation) {
+    if (has_interval && has_decimation && interval_layer == decimation_layer) {
       ctx.error(ctx.where["output.decimation"], "output.decimation", std::to_string(out.output.decimation),
                 "give either output.interval_s or output.decimation, not both");
-    } else if (has_decimation && out.output.decimation < 1) {
+    } else if (has_interval && has_decimation) {
+      // from different layers (--set over the scenario): the higher one wins, as for any key
+      const bool decimation_wins = decimation_layer < interval_layer;
+      const std::string loser = decimation_wins ? "output.interval_s" : "output.decimation";
+      ctx.warn(ctx.where[loser], loser, "", std::string("ignored: ") +
+                                               (decimation_wins ? "output.decimation" : "output.interval_s") +
+                                               " is given by " + ctx.where[decimation_wins ? "output.decimation" : "output.interval_s"]);
+      (decimation_wins ? has_interval : has_decimation) = false;
+    }
+    if (has_decimation && out.output.decimation < 1) {
       ctx.error(ctx.where["output.decimation"], "output.decimation", std::to_string(out.output.decimation),
                 "must be >= 1");
     } else if (!has_decimation && !(interval_s > 0.0 && std::isfinite(interval_s))) {
@@ -839,6 +866,7 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
     if (out.solver.duration_s == 0.0) out.solver.duration_s = end_s;
   };
   std::optional<double> ecu_period_s;  // vehicles with a built-in ECU
+  bool duration_unknown = false;       // from a table or profile that has a problem already
   if (kind == "bev") {
     need_cycle();
     plant::BevParams p = read_bev(vr, cycle_ref, cycle_periodic, ctx);
@@ -887,6 +915,8 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
       double end_s = 0.0;
       for (const plant::BatterySegment& seg : p.profile) end_s += seg.duration_s;
       default_duration(end_s);
+    } else {
+      duration_unknown = true;  // the profile's problem was reported: its length is unknown
     }
     check_signals(plant::BatteryRig::kSignals, out.output.signals, ctx);
     out.plant = std::move(p);
@@ -900,8 +930,8 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
   // steps, rows and ECU ticks: counts computed from user numbers, checked before rounding
   const double h = out.solver.step_s;
   const bool step_ok = h > 0.0 && h <= 1.0;
-  if (ctx.failed_tables.count("driver.cycle") != 0 && out.solver.duration_s == 0.0) {
-    // no cycle: its length is unknown, and the cycle's problem was reported already
+  if ((duration_unknown || ctx.failed_tables.count("driver.cycle") != 0) && out.solver.duration_s == 0.0) {
+    // no cycle or profile: its length is unknown, and its problem was reported already
   } else if (!(out.solver.duration_s > 0.0) || !std::isfinite(out.solver.duration_s)) {
     ctx.error(ctx.where["solver.duration_s"], "solver.duration_s", io::number_text(out.solver.duration_s),
               "must be a finite number > 0 s (give it, or a cycle whose last time stamp sets it)");

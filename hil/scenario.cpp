@@ -54,7 +54,7 @@ std::vector<ScenarioEntry> list_scenarios(const std::string& dir) {
     std::string text, reason;
     if (!io::read_text_file(p.string(), text, reason)) {
       s.description = "(cannot read: " + reason + ")";
-    } else if (line_of_overlong_key(text) != 0) {
+    } else if (line_with_too_many_dots(text) != 0) {
       s.description = "(cannot parse)";
     } else {
       try {

@@ -1,5 +1,6 @@
 #include "io/output_dir.hpp"
 
+#include <dirent.h>
 #include <fcntl.h>
 #include <stdio.h>  // renameat2, RENAME_NOREPLACE (glibc >= 2.28)
 #include <sys/file.h>
@@ -17,7 +18,6 @@
 #include <system_error>
 
 #include "io/number_format.hpp"
-#include "io/text_file.hpp"
 
 namespace fs = std::filesystem;
 
@@ -35,17 +35,67 @@ bool rename_no_replace(const std::string& from, const std::string& to) {
 }
 
 bool plain_name(const std::string& n) {
-  return !n.empty() && n != "." && n != ".." && n.find('/') == std::string::npos && n.find('\0') == std::string::npos;
+  return !n.empty() && n != "." && n != ".." && n.find('/') == std::string::npos && n.find('\0') == std::string::npos &&
+         n.find('\n') == std::string::npos;
 }
 
-// The names listed in dir's manifest; false (why set) if there is no valid manifest.
-bool read_manifest(const std::string& dir, std::vector<std::string>& names, std::string& why) {
-  std::string text, reason;
-  names.clear();
-  if (!read_text_file(dir + "/" + kManifestName, text, reason, 1u << 20)) {
-    why = std::string("no ") + kManifestName + " (" + reason + ")";
+bool same_file(const struct stat& a, const struct stat& b) { return a.st_dev == b.st_dev && a.st_ino == b.st_ino; }
+
+// Flushes a file or folder to disk, so that a committed run survives a power cut.
+void sync_path(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return;
+  ::fsync(fd);
+  ::close(fd);
+}
+
+std::string parent_of(const std::string& path) {
+  const std::string p = fs::path(path).parent_path().string();
+  return p.empty() ? "." : p;
+}
+
+// The names in the folder open as dirfd (not . and ..), with their type (lstat).
+bool list_at(int dirfd, std::vector<std::pair<std::string, mode_t>>& entries, std::string& why) {
+  entries.clear();
+  const int fd = ::dup(dirfd);
+  if (fd < 0) {
+    why = errno_text();
     return false;
   }
+  DIR* d = ::fdopendir(fd);
+  if (d == nullptr) {
+    why = errno_text();
+    ::close(fd);
+    return false;
+  }
+  ::rewinddir(d);
+  while (const dirent* e = ::readdir(d)) {
+    const std::string name = e->d_name;
+    if (name == "." || name == "..") continue;
+    struct stat st {};
+    const mode_t mode = ::fstatat(dirfd, e->d_name, &st, AT_SYMLINK_NOFOLLOW) == 0 ? st.st_mode : 0;
+    entries.emplace_back(name, mode);
+  }
+  ::closedir(d);
+  return true;
+}
+
+// The names listed in the manifest of the folder open as dirfd; false (why set) if there is
+// no valid manifest. Read through the descriptor, never following a link.
+bool read_manifest_at(int dirfd, std::vector<std::string>& names, std::string& why) {
+  names.clear();
+  const int fd = ::openat(dirfd, kManifestName, O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+  struct stat st {};
+  if (fd < 0 || ::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) || st.st_size > (1 << 20)) {
+    why = std::string("no ") + kManifestName + " (" + (fd < 0 ? (errno == ENOENT ? "no such file" : errno_text())
+                                                               : std::string("not a small regular file")) + ")";
+    if (fd >= 0) ::close(fd);
+    return false;
+  }
+  std::string text(static_cast<std::size_t>(st.st_size), '\0');
+  const ssize_t n = ::read(fd, text.data(), text.size());
+  ::close(fd);
+  text.resize(n > 0 ? static_cast<std::size_t>(n) : 0);
   std::size_t at = 0;
   bool first = true;
   while (at < text.size()) {
@@ -74,31 +124,21 @@ bool read_manifest(const std::string& dir, std::vector<std::string>& names, std:
   return true;
 }
 
-std::string manifest_text(const std::set<std::string>& names) {
-  std::string text = std::string(kManifestMagic) + "\n";
-  for (const std::string& n : names) text += n + "\n";
-  return text;
-}
-
-}  // namespace
-
-bool is_earlier_run(const std::string& dir, std::vector<std::string>& files, std::string& why_not) {
+// is_earlier_run() on a folder already open (so that what is checked is what is deleted).
+bool is_earlier_run_at(int dirfd, std::vector<std::string>& files, std::string& why_not) {
   std::string no_manifest;
-  if (!read_manifest(dir, files, no_manifest)) files.clear();
+  if (!read_manifest_at(dirfd, files, no_manifest)) files.clear();
   const std::set<std::string> listed(files.begin(), files.end());
-  std::vector<std::string> foreign;
-  std::error_code ec;
-  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
-    const std::string name = it->path().filename().string();
-    if (name == kManifestName) continue;
-    std::error_code sec;
-    const fs::file_status st = it->symlink_status(sec);
-    if (st.type() == fs::file_type::regular && listed.count(name) != 0) continue;
-    foreign.push_back(name + (st.type() == fs::file_type::directory ? "/" : ""));
-  }
-  if (ec) {
-    why_not = "cannot list it: " + ec.message();
+  std::vector<std::pair<std::string, mode_t>> entries;
+  if (!list_at(dirfd, entries, why_not)) {
+    why_not = "cannot list it: " + why_not;
     return false;
+  }
+  std::vector<std::string> foreign;
+  for (const auto& [name, mode] : entries) {
+    if (name == kManifestName) continue;
+    if (S_ISREG(mode) && listed.count(name) != 0) continue;
+    foreign.push_back(name + (S_ISDIR(mode) ? "/" : ""));
   }
   if (!foreign.empty()) {
     std::sort(foreign.begin(), foreign.end());
@@ -114,11 +154,40 @@ bool is_earlier_run(const std::string& dir, std::vector<std::string>& files, std
   return true;
 }
 
+bool is_empty_at(int dirfd) {
+  std::vector<std::pair<std::string, mode_t>> entries;
+  std::string why;
+  return list_at(dirfd, entries, why) && entries.empty();
+}
+
+std::string manifest_text(const std::set<std::string>& names) {
+  std::string text = std::string(kManifestMagic) + "\n";
+  for (const std::string& n : names) text += n + "\n";
+  return text;
+}
+
+}  // namespace
+
+bool is_earlier_run(const std::string& dir, std::vector<std::string>& files, std::string& why_not) {
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+  if (fd < 0) {
+    why_not = errno == ELOOP ? "a symbolic link" : errno_text();
+    files.clear();
+    return false;
+  }
+  const bool ok = is_earlier_run_at(fd, files, why_not);
+  ::close(fd);
+  return ok;
+}
+
 bool add_to_manifest(const std::string& dir, const std::vector<std::string>& names, std::string& error) {
   std::vector<std::string> listed;
   std::string why;
-  if (!read_manifest(dir, listed, why)) {
-    error = dir + ": " + why;
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+  const bool read = fd >= 0 && read_manifest_at(fd, listed, why);
+  if (fd >= 0) ::close(fd);
+  if (!read) {
+    error = dir + ": " + (why.empty() ? errno_text() : why);
     return false;
   }
   std::set<std::string> all(listed.begin(), listed.end());
@@ -132,6 +201,82 @@ bool add_to_manifest(const std::string& dir, const std::vector<std::string>& nam
   return write_file_atomically(dir + "/" + kManifestName, manifest_text(all), error);
 }
 
+// ---- the lock ---------------------------------------------------------------------------
+
+bool DirLock::acquire(const std::string& final_dir, std::string& error) {
+  release();
+  path_ = final_dir + ".ehpt-lock";
+  const std::string pid = std::to_string(::getpid());
+  for (int attempt = 0; attempt < 10 && fd_ < 0; ++attempt) {
+    int fd = ::open(path_.c_str(), O_RDWR | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0 && errno == ENOENT) {
+      // born with ehpt's text: a temporary file, then a hard link (atomic, never replaces)
+      const std::string tmp = path_ + ".tmp-" + pid;
+      const int tfd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+      if (tfd < 0) {
+        error = tmp + ": cannot create the lock file: " + errno_text();
+        return false;
+      }
+      const std::string text = kLockMagic + pid + "\n";
+      const bool wrote = ::write(tfd, text.data(), text.size()) == static_cast<ssize_t>(text.size());
+      ::close(tfd);
+      const bool linked = wrote && ::link(tmp.c_str(), path_.c_str()) == 0;
+      const int link_errno = errno;
+      ::unlink(tmp.c_str());
+      if (!linked && link_errno != EEXIST) {
+        error = path_ + ": cannot create the lock file: " + std::strerror(link_errno);
+        return false;
+      }
+      continue;  // open what is there now
+    }
+    if (fd < 0) {
+      error = path_ + ": cannot open the lock file: " + (errno == ELOOP ? "a symbolic link" : errno_text());
+      return false;
+    }
+    struct stat held {};
+    if (::fstat(fd, &held) != 0 || !S_ISREG(held.st_mode)) {
+      ::close(fd);
+      error = path_ + ": exists and is not a lock file; choose another --out";
+      return false;
+    }
+    if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+      const bool busy = errno == EWOULDBLOCK;
+      ::close(fd);
+      error = busy ? final_dir + ": another ehpt run is writing this folder (it holds " + path_ +
+                         "); wait for it or choose another --out"
+                   : path_ + ": cannot lock: " + errno_text();
+      return false;
+    }
+    // the holder before us may have removed the file after we opened it: lock the new one
+    struct stat now {};
+    if (::lstat(path_.c_str(), &now) != 0 || !same_file(now, held)) {
+      ::close(fd);
+      continue;
+    }
+    fd_ = fd;
+  }
+  if (fd_ < 0) {
+    error = path_ + ": cannot lock (the file keeps changing)";
+    return false;
+  }
+  return true;
+}
+
+void DirLock::release() {
+  if (fd_ < 0) return;
+  // remove the file only if it carries ehpt's text and is still the one we hold
+  struct stat held {}, now {};
+  char buf[32] = {};
+  if (::fstat(fd_, &held) == 0 && ::lstat(path_.c_str(), &now) == 0 && same_file(held, now) &&
+      ::pread(fd_, buf, sizeof buf - 1, 0) > 0 && std::strncmp(buf, kLockMagic, std::strlen(kLockMagic)) == 0) {
+    ::unlink(path_.c_str());
+  }
+  ::close(fd_);
+  fd_ = -1;
+}
+
+// ---- the output folder ------------------------------------------------------------------
+
 OutputDir::~OutputDir() {
   // an exception (out of memory) is unwinding the run: its half-written folder is ours and
   // worth nothing; a plain return or a crash keeps it
@@ -139,25 +284,6 @@ OutputDir::~OutputDir() {
     std::error_code ec;
     fs::remove_all(partial_, ec);
   }
-  unlock();
-}
-
-void OutputDir::unlock() {
-  if (lock_fd_ < 0) return;
-  // remove the lock file only if it is ours: made by this process, or carrying ehpt's text
-  // (left by a run that crashed), and still the same file
-  struct stat held {}, now {};
-  if (::fstat(lock_fd_, &held) == 0 && ::lstat(lock_path_.c_str(), &now) == 0 && held.st_ino == now.st_ino &&
-      held.st_dev == now.st_dev) {
-    bool ours = created_lock_;
-    if (!ours) {
-      char buf[32] = {};
-      ours = ::pread(lock_fd_, buf, sizeof buf - 1, 0) > 0 && std::strncmp(buf, kLockMagic, std::strlen(kLockMagic)) == 0;
-    }
-    if (ours) ::unlink(lock_path_.c_str());
-  }
-  ::close(lock_fd_);
-  lock_fd_ = -1;
 }
 
 bool OutputDir::open(const std::string& final_dir, std::string& error) {
@@ -180,44 +306,8 @@ bool OutputDir::open(const std::string& final_dir, std::string& error) {
   }
 
   // 1. the lock, held until commit: a second run with the same --out stops here
-  lock_path_ = final_ + ".ehpt-lock";
-  for (int attempt = 0; attempt < 10 && lock_fd_ < 0; ++attempt) {
-    int fd = ::open(lock_path_.c_str(), O_RDWR | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
-    bool created = fd >= 0;
-    if (fd < 0 && errno == EEXIST) fd = ::open(lock_path_.c_str(), O_RDWR | O_NOFOLLOW | O_CLOEXEC | O_NONBLOCK);
-    if (fd < 0) {
-      error = lock_path_ + ": cannot open the lock file: " + errno_text();
-      return false;
-    }
-    struct stat held {};
-    if (::fstat(fd, &held) != 0 || !S_ISREG(held.st_mode)) {
-      ::close(fd);
-      error = lock_path_ + ": exists and is not a lock file; choose another --out, nothing was run";
-      return false;
-    }
-    if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
-      const bool busy = errno == EWOULDBLOCK;
-      ::close(fd);
-      error = busy ? final_ + ": another ehpt run is writing this folder (it holds " + lock_path_ +
-                         "); wait for it or choose another --out, nothing was run"
-                   : lock_path_ + ": cannot lock: " + errno_text();
-      return false;
-    }
-    // the holder before us may have removed the file after we opened it: lock the new one
-    struct stat now {};
-    if (::lstat(lock_path_.c_str(), &now) != 0 || now.st_ino != held.st_ino || now.st_dev != held.st_dev) {
-      ::close(fd);
-      continue;
-    }
-    lock_fd_ = fd;
-    created_lock_ = created;
-    if (created) {
-      const std::string text = std::string(kLockMagic) + std::to_string(::getpid()) + "\n";
-      if (::write(fd, text.data(), text.size()) < 0) { /* informative only */ }
-    }
-  }
-  if (lock_fd_ < 0) {
-    error = lock_path_ + ": cannot lock (the file keeps changing)";
+  if (!lock_.acquire(final_, error)) {
+    error += ", nothing was run";
     return false;
   }
 
@@ -235,12 +325,12 @@ bool OutputDir::open(const std::string& final_dir, std::string& error) {
     }
     if (!refused.empty()) {
       error = refused;
-      unlock();
+      lock_.release();
       return false;
     }
   } else if (errno != ENOENT) {
     error = final_ + ": " + errno_text();
-    unlock();
+    lock_.release();
     return false;
   }
 
@@ -252,25 +342,25 @@ bool OutputDir::open(const std::string& final_dir, std::string& error) {
       created_partial_ = true;
     } else if (errno != EEXIST) {
       error = partial_ + ": cannot create output folder: " + errno_text();
-      unlock();
+      lock_.release();
       return false;
     }
   }
   if (!created_partial_) {
     error = base + ": cannot find a free name for the temporary folder";
-    unlock();
+    lock_.release();
     return false;
   }
   return true;
 }
 
-bool OutputDir::commit(std::string& error) {
+bool OutputDir::commit(std::string& error, bool replace_earlier) {
   if (!created_partial_ || committed_) {
     error = final_ + ": nothing to commit";
     return false;
   }
   const std::string kept = " (results kept in " + partial_ + ")";
-  // the manifest: every regular file in our folder (we wrote them all)
+  // the manifest: every regular file in our folder (we wrote them all), all flushed to disk
   std::set<std::string> names;
   std::error_code ec;
   for (fs::directory_iterator it(partial_, ec), end; !ec && it != end; it.increment(ec)) {
@@ -278,67 +368,104 @@ bool OutputDir::commit(std::string& error) {
     if (it->symlink_status(sec).type() == fs::file_type::regular) names.insert(it->path().filename().string());
   }
   names.erase(kManifestName);
-  if (ec || !write_file_atomically(partial_ + "/" + kManifestName, manifest_text(names), error)) {
-    if (ec) error = partial_ + ": cannot list: " + ec.message();
+  if (ec) {
+    error = partial_ + ": cannot list: " + ec.message() + kept;
+    return false;
+  }
+  if (!write_file_atomically(partial_ + "/" + kManifestName, manifest_text(names), error)) {
     error += kept;
     return false;
   }
+  for (const std::string& n : names) sync_path(partial_ + "/" + n);
+  sync_path(partial_);
 
   struct stat st {};
-  std::string aside;  // an earlier run moved out of the way
-  std::vector<std::string> old_files;
-  if (::lstat(final_.c_str(), &st) == 0) {
-    std::string why;
-    if (S_ISDIR(st.st_mode) && fs::is_empty(final_, ec)) {
-      // rename replaces an empty folder atomically, and fails if it filled up meanwhile
-      if (::rename(partial_.c_str(), final_.c_str()) != 0) {
-        error = final_ + ": cannot rename the results into place: " + errno_text() + kept;
-        return false;
-      }
-      committed_ = true;
-      unlock();
-      return true;
-    }
-    if (!S_ISDIR(st.st_mode) || S_ISLNK(st.st_mode) || !is_earlier_run(final_, old_files, why)) {
-      error = final_ + ": changed during the run and is no longer an earlier ehpt run (" +
-              (why.empty() ? std::string("not a folder") : why) + ")" + kept;
+  if (::lstat(final_.c_str(), &st) != 0) {
+    if (errno != ENOENT) {
+      error = final_ + ": " + errno_text() + kept;
       return false;
     }
-    const std::string base = final_ + ".replaced-" + std::to_string(::getpid());
-    for (int i = 0; i < 100 && aside.empty(); ++i) {
-      const std::string candidate = i == 0 ? base : base + "-" + std::to_string(i);
-      if (rename_no_replace(final_, candidate)) {
-        aside = candidate;
-      } else if (errno != EEXIST) {
-        error = final_ + ": cannot move the earlier run aside: " + errno_text() + kept;
-        return false;
-      }
-    }
-    if (aside.empty()) {
-      error = base + ": cannot find a free name to move the earlier run aside" + kept;
+    if (!rename_no_replace(partial_, final_)) {
+      error = final_ + ": cannot rename the results into place: " + errno_text() + kept;
       return false;
     }
-  } else if (errno != ENOENT) {
-    error = final_ + ": " + errno_text() + kept;
-    return false;
+    committed_ = true;
+    sync_path(parent_of(final_));
+    lock_.release();
+    return true;
   }
 
+  // DIR exists: check it through a descriptor, so that what was checked is what is removed
+  const int dirfd = ::open(final_.c_str(), O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+  if (dirfd < 0) {
+    error = final_ + ": changed during the run and is no longer a folder ehpt may replace" + kept;
+    return false;
+  }
+  struct stat checked {};
+  ::fstat(dirfd, &checked);
+  if (is_empty_at(dirfd)) {
+    ::close(dirfd);
+    // rename replaces an empty folder atomically, and fails if it filled up meanwhile
+    if (::rename(partial_.c_str(), final_.c_str()) != 0) {
+      error = final_ + ": cannot rename the results into place: " + errno_text() + kept;
+      return false;
+    }
+    committed_ = true;
+    sync_path(parent_of(final_));
+    lock_.release();
+    return true;
+  }
+  if (!replace_earlier) {
+    ::close(dirfd);
+    warnings_.push_back("the earlier run in " + final_ + " was kept; this run's outputs are in " + partial_);
+    lock_.release();
+    return true;
+  }
+  std::vector<std::string> old_files;
+  std::string why;
+  if (!is_earlier_run_at(dirfd, old_files, why)) {
+    ::close(dirfd);
+    error = final_ + ": changed during the run and is no longer an earlier ehpt run (" + why + ")" + kept;
+    return false;
+  }
+  // move it aside under a name of ours, and make sure it is the folder we checked
+  const std::string base = final_ + ".replaced-" + std::to_string(::getpid());
+  std::string aside;
+  for (int i = 0; i < 100 && aside.empty(); ++i) {
+    const std::string candidate = i == 0 ? base : base + "-" + std::to_string(i);
+    if (rename_no_replace(final_, candidate)) {
+      aside = candidate;
+    } else if (errno != EEXIST) {
+      ::close(dirfd);
+      error = final_ + ": cannot move the earlier run aside: " + errno_text() + kept;
+      return false;
+    }
+  }
+  struct stat moved {};
+  if (aside.empty() || ::lstat(aside.c_str(), &moved) != 0 || !same_file(moved, checked)) {
+    if (!aside.empty()) rename_no_replace(aside, final_);  // not the folder we checked: put it back
+    ::close(dirfd);
+    error = final_ + ": changed during the run; nothing of it was touched" + kept;
+    return false;
+  }
   if (!rename_no_replace(partial_, final_)) {
     error = final_ + ": cannot rename the results into place: " + errno_text() + kept;
-    if (!aside.empty() && !rename_no_replace(aside, final_)) error += "; the earlier run is in " + aside;
+    if (!rename_no_replace(aside, final_)) error += "; the earlier run is in " + aside;
+    ::close(dirfd);
     return false;
   }
   committed_ = true;
-  if (!aside.empty()) {
-    // delete exactly what the earlier run's manifest lists, then the folder if now empty
-    for (const std::string& f : old_files) ::unlink((aside + "/" + f).c_str());
-    ::unlink((aside + "/" + kManifestName).c_str());
-    if (::rmdir(aside.c_str()) != 0) {
-      warnings_.push_back("the earlier run's folder was kept as " + aside + " (" + errno_text() +
-                          "): it held files ehpt did not write");
-    }
+  sync_path(parent_of(final_));
+  // delete exactly what the earlier run's manifest lists, through the checked folder's
+  // descriptor, then the folder if it is empty now
+  for (const std::string& f : old_files) ::unlinkat(dirfd, f.c_str(), 0);
+  ::unlinkat(dirfd, kManifestName, 0);
+  ::close(dirfd);
+  if (::rmdir(aside.c_str()) != 0) {
+    warnings_.push_back("the earlier run's folder was kept as " + aside + " (" + errno_text() +
+                        "): it held files ehpt did not write");
   }
-  unlock();
+  lock_.release();
   return true;
 }
 
@@ -406,7 +533,9 @@ bool write_file_atomically(const std::string& path, const std::string& content, 
     }
     done += static_cast<std::size_t>(n);
   }
-  if (::close(fd) != 0) {
+  // on disk before the rename, so that the name never points at a half-written file
+  const bool synced = ::fsync(fd) == 0;
+  if (::close(fd) != 0 || !synced) {
     error = tmp + ": write failed: " + errno_text();
     ::unlink(tmp.c_str());
     return false;

@@ -106,10 +106,12 @@ bool TextFileWriter::write(std::string_view text, std::string& error) {
 
 bool TextFileWriter::close(std::string& error) {
   if (fd_ < 0) return true;
+  // on disk before the run is committed: a committed folder never holds a truncated file
+  const bool synced = ::fsync(fd_) == 0;
   const int rc = ::close(fd_);
   fd_ = -1;
-  if (rc != 0) error = path_ + ": write failed: " + std::strerror(errno);
-  return rc == 0;
+  if (rc != 0 || !synced) error = path_ + ": write failed: " + std::strerror(errno);
+  return rc == 0 && synced;
 }
 
 }  // namespace ehpt::io

@@ -11,7 +11,10 @@ void validate(const BatteryRigParams& p, Problems& problems) {
   for (std::size_t k = 0; k < p.profile.size(); ++k) {
     const BatterySegment& s = p.profile[k];
     const std::string at = "profile[" + std::to_string(k) + "]";
-    if (!std::isfinite(s.value)) problems.add(at + ".value", number_text(s.value), "must be a finite number");
+    if (!std::isfinite(s.value)) {
+      problems.add(at + (s.kind == BatterySegment::Kind::kCurrent ? ".current_A" : ".power_W"), number_text(s.value),
+                   "must be a finite number");
+    }
     if (!(s.duration_s > 0.0) || !std::isfinite(s.duration_s)) {
       problems.add(at + ".duration_s", number_text(s.duration_s), "must be a finite number > 0");
     }
@@ -52,7 +55,15 @@ BatteryRig::State BatteryRig::initial_state() const {
 
 // Run phase.
 void BatteryRig::crossings(double t_s, const State&, const Modes& m, const Inputs&, double* z) const {
-  z[0] = m.segment == kRest ? 1.0 : ends_s_[static_cast<std::size_t>(m.segment)] - t_s;
+  if (m.segment == kRest) {
+    z[0] = 1.0;
+    return;
+  }
+  // a grid time t0 + n h that rounds a hair below an end time counts as that end, so the
+  // switch happens on the step meant to end there, whatever the rounding of n h
+  const double end_s = ends_s_[static_cast<std::size_t>(m.segment)];
+  const double z_s = end_s - t_s;
+  z[0] = std::abs(z_s) <= 1e-12 * std::max(1.0, end_s) ? 0.0 : z_s;
 }
 
 void BatteryRig::on_crossing(int, double, State&, Modes& m, const Inputs&) const {

@@ -7,6 +7,8 @@
 // was run), 3 run-time fault (outputs kept), 128 + N stopped by signal N (130 SIGINT,
 // 143 SIGTERM, 129 SIGHUP; outputs so far kept and committed).
 
+#include <fcntl.h>   // AT_FDCWD
+#include <stdio.h>   // renameat2, RENAME_NOREPLACE
 #include <stdlib.h>  // mkdtemp
 #include <unistd.h>
 
@@ -127,8 +129,10 @@ bool wants_help(const std::vector<std::string>& args) {
 // Draws the figures of the run in src_dir into out_dir with the plot tool (no shell: an
 // argument vector), naming them as if in shown_dir. True on success.
 bool run_plot_tool(const std::string& src_dir, const std::string& out_dir, const std::string& shown_dir, bool quiet) {
-  std::vector<std::string> argv = {"/usr/bin/python3", ehpt::hil::tools_dir() + "/plot.py", src_dir,
-                                   "--out-dir", out_dir, "--as", shown_dir};
+  // a folder named "-x" must not be taken for an option
+  const auto safe = [](const std::string& p) { return !p.empty() && p[0] == '-' ? "./" + p : p; };
+  std::vector<std::string> argv = {"/usr/bin/python3", ehpt::hil::tools_dir() + "/plot.py", safe(src_dir),
+                                   "--out-dir", safe(out_dir), "--as", shown_dir};
   if (quiet) argv.push_back("--quiet");
   std::string reason;
   const int rc = ehpt::io::run_program(argv, reason);
@@ -149,6 +153,14 @@ int plot_existing(const std::string& dir, bool quiet) {
     std::cerr << "error: " << dir << ": not a folder (give a run's output folder)\n";
     return 1;
   }
+  // the folder's lock: no run may commit into it, and no other plot update its manifest,
+  // while the figures move in
+  ehpt::io::DirLock lock;
+  std::string error;
+  if (!lock.acquire(dir, error)) {
+    std::cerr << "error: " << error << "\n";
+    return 1;
+  }
   std::vector<std::string> listed;
   std::string why;
   const bool ehpt_run = ehpt::io::is_earlier_run(dir, listed, why);
@@ -160,26 +172,30 @@ int plot_existing(const std::string& dir, bool quiet) {
   const std::string tmp = tmpl;  // ours: made by mkdtemp in this process
   bool ok = run_plot_tool(dir, tmp, dir, quiet);
   std::vector<std::string> moved;
-  for (fs::directory_iterator it(tmp, ec), end; ok && !ec && it != end; it.increment(ec)) {
+  std::error_code list_ec;
+  for (fs::directory_iterator it(tmp, list_ec), end; ok && !list_ec && it != end; it.increment(list_ec)) {
     const std::string name = it->path().filename().string();
     const std::string target = dir + "/" + name;
-    const bool exists = fs::exists(fs::symlink_status(target, ec));
     const bool ours = ehpt_run && std::find(listed.begin(), listed.end(), name) != listed.end();
-    if (exists && !ours) {
-      std::cerr << "error: " << target << ": exists and is not a figure ehpt made; kept, the new figure is not written\n";
-      ok = false;
-      continue;
-    }
-    fs::rename(it->path(), target, ec);
-    if (ec) {
-      std::cerr << "error: " << target << ": " << ec.message() << "\n";
+    // a listed figure of ours is replaced; any other name only if it is free (no replace)
+    const bool renamed = ours ? ::rename(it->path().c_str(), target.c_str()) == 0
+                              : ::renameat2(AT_FDCWD, it->path().c_str(), AT_FDCWD, target.c_str(), RENAME_NOREPLACE) == 0;
+    if (!renamed) {
+      if (errno == EEXIST) {
+        std::cerr << "error: " << target << ": exists and is not a figure ehpt made; kept, the new figure is not written\n";
+      } else {
+        std::cerr << "error: " << target << ": " << std::strerror(errno) << "\n";
+      }
       ok = false;
       continue;
     }
     moved.push_back(name);
   }
+  if (list_ec) {
+    std::cerr << "error: " << tmp << ": " << list_ec.message() << "\n";
+    ok = false;
+  }
   fs::remove_all(tmp, ec);
-  std::string error;
   if (ehpt_run && !moved.empty() && !ehpt::io::add_to_manifest(dir, moved, error)) {
     std::cerr << "error: " << error << "\n";
     ok = false;
@@ -218,6 +234,10 @@ int cmd_run(const std::vector<std::string>& args) {
     }
     if (a == "--out") {
       out_dir = args[++i];
+      if (out_dir.empty()) {
+        std::cerr << "--out needs a folder name (got an empty one)\n";
+        return 1;
+      }
     } else if (a == "--set") {
       sets.push_back(args[++i]);
     } else if (a == "--plot") {
@@ -260,7 +280,9 @@ int cmd_run(const std::vector<std::string>& args) {
   bool printed = true;
   if (!quiet) {
     std::string text = r.summary_text;
-    if (r.exit_code != 1) text += "outputs       " + out_dir + "/timeseries.csv, " + out_dir + "/summary.json\n";
+    if (!r.results_dir.empty()) {
+      text += "outputs       " + r.results_dir + "/timeseries.csv, " + r.results_dir + "/summary.json\n";
+    }
     printed = out(text);
   }
   if (r.exit_code != 0) return r.exit_code;

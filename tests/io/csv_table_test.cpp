@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "test_plants.hpp"
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -12,7 +14,7 @@ namespace ehpt::io {
 namespace {
 
 std::string write_temp(const std::string& name, const std::string& content) {
-  const auto dir = std::filesystem::temp_directory_path() / "ehpt_io_test";
+  const auto dir = ehpt::test::scratch_root() / "ehpt_io_test";
   std::filesystem::create_directories(dir);
   const std::string path = (dir / name).string();
   std::ofstream(path) << content;

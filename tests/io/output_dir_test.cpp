@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "test_plants.hpp"
+
 #include <unistd.h>
 
 #include <cmath>
@@ -18,7 +20,7 @@ namespace {
 
 // A fresh scratch folder per test.
 fs::path scratch(const std::string& name) {
-  const fs::path root = fs::temp_directory_path() / ("ehpt_outdir_" + name);
+  const fs::path root = ehpt::test::scratch_root() / ("ehpt_outdir_" + name);
   fs::remove_all(root);
   fs::create_directories(root);
   return root;
@@ -119,13 +121,24 @@ TEST(OutputDir, NeverReplacesAFolderOfSomeoneElsesFiles) {
 TEST(OutputDir, NeverTouchesTheUsersPartialOrReplacedPaths) {
   const fs::path root = scratch("user_paths");
   const std::string dir = (root / "run").string();
+  // the old fixed names, and the very names this process would pick first
+  const std::string pid = std::to_string(::getpid());
   write(dir + ".partial/keep.txt", "a folder of mine");
   write(dir + ".replaced", "a file of mine");
+  write(dir + ".partial-" + pid + "/keep.txt", "mine, with your pid");
+  write(dir + ".replaced-" + pid, "mine too, with your pid");
   run_into(dir, {{"summary.json", "1"}});
   run_into(dir, {{"summary.json", "2"}});  // replaces the first run
   EXPECT_EQ(read(dir + ".partial/keep.txt"), "a folder of mine");
   EXPECT_EQ(read(dir + ".replaced"), "a file of mine");
+  EXPECT_EQ(read(dir + ".partial-" + pid + "/keep.txt"), "mine, with your pid");
+  EXPECT_EQ(read(dir + ".replaced-" + pid), "mine too, with your pid");
   EXPECT_EQ(read(dir + "/summary.json"), "2");
+  // a lock file of that name that is not ehpt's is used, and left in place
+  write(dir + ".ehpt-lock", "");
+  run_into(dir, {{"summary.json", "3"}});
+  EXPECT_TRUE(fs::exists(dir + ".ehpt-lock"));
+  EXPECT_EQ(read(dir + "/summary.json"), "3");
 }
 
 TEST(OutputDir, ASecondRunOnTheSameFolderStopsAtOnce) {
@@ -168,6 +181,28 @@ TEST(OutputDir, AnExceptionRemovesTheFolderItMadeAReturnKeepsIt) {
   EXPECT_FALSE(removed.empty());
   EXPECT_FALSE(fs::exists(removed));
   EXPECT_FALSE(fs::exists(root / "b.ehpt-lock"));
+}
+
+TEST(OutputDir, AnInterruptedRunDoesNotReplaceAnEarlierOne) {
+  const fs::path root = scratch("interrupted");
+  const std::string dir = (root / "run").string();
+  run_into(dir, {{"summary.json", "complete"}});
+  OutputDir out;
+  std::string error;
+  ASSERT_TRUE(out.open(dir, error)) << error;
+  ASSERT_TRUE(write_file_atomically(out.file("summary.json"), "interrupted", error));
+  ASSERT_TRUE(out.commit(error, /*replace_earlier=*/false)) << error;
+  EXPECT_EQ(read(dir + "/summary.json"), "complete");
+  EXPECT_EQ(out.results_dir(), out.partial_dir());
+  EXPECT_EQ(read(out.partial_dir() + "/summary.json"), "interrupted");
+  ASSERT_EQ(out.warnings().size(), 1u);
+  EXPECT_NE(out.warnings()[0].find("was kept; this run's outputs are in"), std::string::npos);
+  EXPECT_FALSE(fs::exists(dir + ".ehpt-lock"));
+  // into an empty place it is committed as usual
+  OutputDir fresh_out;
+  ASSERT_TRUE(fresh_out.open((root / "new").string(), error));
+  ASSERT_TRUE(fresh_out.commit(error, false)) << error;
+  EXPECT_EQ(fresh_out.results_dir(), (root / "new").string());
 }
 
 TEST(OutputDir, ManifestGrowsWithLaterFigures) {

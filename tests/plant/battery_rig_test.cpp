@@ -235,7 +235,7 @@ TEST(BatteryRig, ValidateNamesEveryBadField) {
   EXPECT_EQ(problems.list()[0].value, "0");
   EXPECT_EQ(problems.list()[1].field, "profile[2].duration_s");
   EXPECT_EQ(problems.list()[1].value, "nan");
-  EXPECT_EQ(problems.list()[2].field, "profile[3].value");
+  EXPECT_EQ(problems.list()[2].field, "profile[3].power_W");  // the key the user wrote
   EXPECT_EQ(problems.list()[2].value, "nan");
   EXPECT_EQ(problems.list()[3].field, "profile[4].duration_s");
   EXPECT_EQ(problems.list()[3].value, "-1");
@@ -259,6 +259,18 @@ TEST(BatteryRig, SignalsNameEveryOutputOnce) {
       EXPECT_NE(s[i].member, s[j].member);
     }
   }
+}
+
+// A grid time that rounds a hair below a segment's end still ends the segment on that step:
+// the profile ends at 1.0 + 0.281 = 1.2810000000000001 s, the grid's last point is
+// 1281 * 0.001 = 1.281 s, 2e-16 s before it.
+TEST(BatteryRig, ASegmentEndOnTheGridSwitchesOnThatStepWhateverTheRounding) {
+  const BatteryRig rig({small_battery(), {{Kind::kCurrent, 10.0, 1.0}, {Kind::kCurrent, 20.0, 0.281}}});
+  ASSERT_LT(1281 * 1e-3, rig.profile_end_s());
+  const RigRun r = simulate(rig, 1e-3, 1.281);
+  EXPECT_EQ(at(r, 1.0).profile_segment, 1.0);
+  EXPECT_EQ(r.ys.back().profile_segment, -1.0);  // the end of the profile is rest, at the last row
+  EXPECT_NEAR(r.ys.back().charge_out_As, 10.0 * 1.0 + 20.0 * 0.281, 1e-9);
 }
 
 }  // namespace

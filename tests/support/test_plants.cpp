@@ -1,10 +1,26 @@
 #include "test_plants.hpp"
 
+#include <unistd.h>
+
 #include <stdexcept>
 
 #include "hil/config.hpp"
 
 namespace ehpt::test {
+
+std::filesystem::path scratch_root() {
+  struct Root {
+    std::filesystem::path path =
+        std::filesystem::temp_directory_path() / ("ehpt_test_" + std::to_string(::getpid()));
+    Root() { std::filesystem::create_directories(path); }
+    ~Root() {
+      std::error_code ec;
+      std::filesystem::remove_all(path, ec);  // ours: made by this process
+    }
+  };
+  static const Root root;
+  return root.path;
+}
 
 hil::Scenario load(const std::string& path, const std::vector<std::string>& overrides) {
   hil::Scenario sc;

@@ -1,6 +1,7 @@
 #pragma once
 // Parameter sets shared by several tests (the shipped MBEV, a coast-down vehicle, cycles).
 
+#include <filesystem>
 #include <string>
 
 #include "hil/config.hpp"
@@ -9,6 +10,11 @@
 namespace ehpt::test {
 
 inline std::string source_path(const std::string& rel) { return std::string(EHPT_SOURCE_DIR) + "/" + rel; }
+
+// This test process's scratch folder, <temp>/ehpt_test_<pid>, made on first use and removed
+// when the process ends: ctest runs every test in a process of its own, so tests that run at
+// the same time (ctest -j, two checkouts, CI next to a developer) never share a path.
+std::filesystem::path scratch_root();
 
 // A scenario through the real loader (aborts the test on problems).
 hil::Scenario load(const std::string& path, const std::vector<std::string>& overrides = {});

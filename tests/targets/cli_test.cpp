@@ -44,7 +44,7 @@ std::string slurp(const std::string& path) {
 
 // One folder per test for the captured streams: ctest runs tests in parallel.
 fs::path capture_dir() {
-  const fs::path tmp = fs::temp_directory_path() /
+  const fs::path tmp = ehpt::test::scratch_root() /
                        ("ehpt_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
   fs::create_directories(tmp);
   return tmp;
@@ -53,10 +53,11 @@ fs::path capture_dir() {
 // Starts the binary with an argument vector (no shell), stdout and stderr into files, or
 // stdout into stdout_fd when given. env: extra "NAME=value" entries.
 pid_t spawn_ehpt(const std::vector<std::string>& args, const std::string& tag, int stdout_fd = -1,
-                 const std::vector<std::string>& env = {}) {
+                 const std::vector<std::string>& env = {}, const std::string& cwd = "") {
   const fs::path tmp = capture_dir();
   posix_spawn_file_actions_t fa;
   posix_spawn_file_actions_init(&fa);
+  if (!cwd.empty()) posix_spawn_file_actions_addchdir_np(&fa, cwd.c_str());
   if (stdout_fd >= 0) {
     posix_spawn_file_actions_adddup2(&fa, stdout_fd, STDOUT_FILENO);
   } else {
@@ -125,7 +126,7 @@ bool have_matplotlib() {
 class BadInput : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("ehpt_bad_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    dir_ = ehpt::test::scratch_root() / ("ehpt_bad_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     vehicle_ = slurp(ehpt::test::source_path("vehicles/mbev.toml"));
@@ -165,7 +166,8 @@ TEST_F(BadInput, UnknownKey) {
 
 TEST_F(BadInput, MissingField) {
   replace(vehicle_, "mass_kg = 1300.0\n", "");
-  EXPECT_HAS(run().err, file("vehicle.toml") + ": vehicle.mass_kg: missing (required number)");
+  // at the line of the [vehicle] table it is missing from
+  EXPECT_HAS(run().err, file("vehicle.toml") + ":6: vehicle.mass_kg: missing (required number)");
 }
 
 TEST_F(BadInput, NegativeMass) {
@@ -283,7 +285,7 @@ TEST_F(BadInput, EveryProblemIsListedAtOnce) {
 class BadPsdInput : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("ehpt_badpsd_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    dir_ = ehpt::test::scratch_root() / ("ehpt_badpsd_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     vehicle_ = slurp(ehpt::test::source_path("vehicles/psecu2.toml"));
@@ -339,7 +341,7 @@ TEST_F(BadPsdInput, UnknownEcuKind) {
 }
 
 TEST(Cli, TwoRunsGiveBitIdenticalTimeseries) {
-  const fs::path tmp = fs::temp_directory_path() / "ehpt_cli_repeat";
+  const fs::path tmp = ehpt::test::scratch_root() / "ehpt_cli_repeat";
   fs::remove_all(tmp);
   const std::string scenario = ehpt::test::source_path("scenarios/ev_sort1.toml");
   const std::string hybrid = ehpt::test::source_path("scenarios/psecu2_nedc.toml") + " --set solver.duration_s=400";
@@ -365,7 +367,7 @@ TEST(Cli, TwoRunsGiveBitIdenticalTimeseries) {
 }
 
 TEST(Cli, RunTimeFaultKeepsOutputsAndExitsNonZero) {
-  const fs::path out = fs::temp_directory_path() / "ehpt_cli_fault";
+  const fs::path out = ehpt::test::scratch_root() / "ehpt_cli_fault";
   fs::remove_all(out);
   const Result r = ehpt("run " + ehpt::test::source_path("scenarios/ev_sort1.toml") +
                         " --set vehicle.battery.soc_min=0.6999 --out " + out.string());
@@ -378,7 +380,7 @@ TEST(Cli, RunTimeFaultKeepsOutputsAndExitsNonZero) {
 }
 
 TEST(Cli, WarnsAboutTheLimiterQuirkOfTheTwoFlangeTest) {
-  const fs::path out = fs::temp_directory_path() / "ehpt_cli_warn";
+  const fs::path out = ehpt::test::scratch_root() / "ehpt_cli_warn";
   fs::remove_all(out);
   const Result r = ehpt("run " + ehpt::test::source_path("scenarios/two_flange_test.toml") + " --out " + out.string());
   EXPECT_EQ(r.exit_code, 0);
@@ -389,7 +391,7 @@ TEST(Cli, PlotWritesTheFigures) {
   if (!have_matplotlib()) {
     GTEST_SKIP() << "/usr/bin/python3 with matplotlib and numpy is not installed (tools/setup.sh installs it)";
   }
-  const fs::path out = fs::temp_directory_path() / "ehpt_cli_plot";
+  const fs::path out = ehpt::test::scratch_root() / "ehpt_cli_plot";
   fs::remove_all(out);
   const Result r = ehpt("run " + ehpt::test::source_path("scenarios/ev_sort1.toml") + " --quiet --plot --out " +
                         out.string());
@@ -397,7 +399,7 @@ TEST(Cli, PlotWritesTheFigures) {
   for (const char* png : {"speed.png", "torque.png", "power.png", "soc.png", "locked.png"}) {
     EXPECT_GT(fs::file_size(out / png), 10000u) << png;
   }
-  const fs::path hybrid = fs::temp_directory_path() / "ehpt_cli_plot_hybrid";
+  const fs::path hybrid = ehpt::test::scratch_root() / "ehpt_cli_plot_hybrid";
   fs::remove_all(hybrid);
   ASSERT_EQ(ehpt("run " + ehpt::test::source_path("scenarios/psecu2_nedc.toml") +
                  " --set solver.duration_s=60 --quiet --plot --out " + hybrid.string())
@@ -405,7 +407,7 @@ TEST(Cli, PlotWritesTheFigures) {
             0);
   EXPECT_GT(fs::file_size(hybrid / "hybrid.png"), 10000u);
   EXPECT_GT(fs::file_size(hybrid / "hybrid_power.png"), 10000u);
-  const fs::path rig = fs::temp_directory_path() / "ehpt_cli_plot_rig";
+  const fs::path rig = ehpt::test::scratch_root() / "ehpt_cli_plot_rig";
   fs::remove_all(rig);
   ASSERT_EQ(ehpt("run " + ehpt::test::source_path("scenarios/one_flange_test.toml") + " --quiet --out " + rig.string())
                 .exit_code,
@@ -439,7 +441,7 @@ TEST(Cli, HelpListAndSignals) {
 // ---- output folders, the plot tool, signals and streams (issue 6) --------------------
 
 fs::path fresh(const std::string& name) {
-  const fs::path p = fs::temp_directory_path() / ("ehpt_cli6_" + name);
+  const fs::path p = ehpt::test::scratch_root() / ("ehpt_cli6_" + name);
   fs::remove_all(p);
   fs::create_directories(p);
   return p;
@@ -544,18 +546,73 @@ TEST(CliOutputs, AFailedPlotIsANonZeroExitAndKeepsTheRun) {
   EXPECT_HAS(r.err, "plotting failed (the plot tool exited with 3)");
   EXPECT_TRUE(fs::exists(out + "/timeseries.csv"));
   EXPECT_EQ(ehpt_argv({"plot", out}, {"EHPT_TOOLS_DIR=" + (root / "tools").string()}).exit_code, 1);
-  // a user's file of a figure's name is never overwritten by `ehpt plot`
-  if (have_matplotlib()) {
-    const fs::path mine = root / "mine";
-    fs::create_directories(mine);
-    fs::copy_file(out + "/timeseries.csv", mine / "timeseries.csv");
-    std::ofstream(mine / "torque.png") << "my own figure";
-    const Result p = ehpt_argv({"plot", mine.string()});
-    EXPECT_EQ(p.exit_code, 1);
-    EXPECT_HAS(p.err, "torque.png: exists and is not a figure ehpt made");
-    EXPECT_EQ(slurp((mine / "torque.png").string()), "my own figure");
-    EXPECT_TRUE(fs::exists(mine / "efficiency.png"));
+}
+
+TEST(CliOutputs, PlotNeverOverwritesAUsersFileAndWaitsForNoRun) {
+  if (!have_matplotlib()) GTEST_SKIP() << "/usr/bin/python3 with matplotlib and numpy is not installed";
+  const fs::path root = fresh("plotmine");
+  const std::string run = (root / "run").string();
+  ASSERT_EQ(ehpt_argv({"run", ehpt::test::source_path("scenarios/one_flange_test.toml"), "--quiet", "--out", run})
+                .exit_code,
+            0);
+  // a user's folder with a file of a figure's name: that file is kept, the others are drawn
+  const fs::path mine = root / "mine";
+  fs::create_directories(mine);
+  fs::copy_file(run + "/timeseries.csv", mine / "timeseries.csv");
+  std::ofstream(mine / "torque.png") << "my own figure";
+  const Result p = ehpt_argv({"plot", mine.string()});
+  EXPECT_EQ(p.exit_code, 1);
+  EXPECT_HAS(p.err, "torque.png: exists and is not a figure ehpt made");
+  EXPECT_EQ(slurp((mine / "torque.png").string()), "my own figure");
+  EXPECT_TRUE(fs::exists(mine / "efficiency.png"));
+  // while a run writes the folder, `ehpt plot` on it stops at once
+  std::vector<std::string> args = {"run", ehpt::test::source_path("scenarios/ev_nedc.toml"), "--quiet", "--out", run};
+  args.insert(args.end(), kLongRun.begin(), kLongRun.end());
+  const pid_t writer = spawn_ehpt(args, "writer");
+  ASSERT_TRUE(wait_for(run + ".ehpt-lock"));
+  const Result busy = ehpt_argv({"plot", run});
+  EXPECT_EQ(wait_ehpt(writer, "writer").exit_code, 0);
+  EXPECT_EQ(busy.exit_code, 1);
+  EXPECT_HAS(busy.err, "another ehpt run is writing this folder");
+  EXPECT_HAS(slurp(run + "/summary.json"), "\"scenario\": \"ev_nedc\"");  // the run committed undisturbed
+}
+
+TEST(CliOutputs, FolderNamesThatLookLikeOptionsOrAreEmpty) {
+  if (!have_matplotlib()) GTEST_SKIP() << "/usr/bin/python3 with matplotlib and numpy is not installed";
+  const fs::path root = fresh("dash");
+  // relative to the child's working folder: --out -run
+  const Result r = wait_ehpt(spawn_ehpt({"run", ehpt::test::source_path("scenarios/one_flange_test.toml"), "--quiet",
+                                         "--plot", "--out", "-run"},
+                                        "dash", -1, {}, root.string()),
+                             "dash");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(root / "-run/torque.png"));
+  const Result empty = ehpt_argv({"run", ehpt::test::source_path("scenarios/one_flange_test.toml"), "--out", ""});
+  EXPECT_EQ(empty.exit_code, 1);
+  EXPECT_HAS(empty.err, "--out needs a folder name");
+}
+
+// A signal while loading or running never lets this run replace a complete earlier one.
+TEST(CliOutputs, AnInterruptedRunKeepsTheEarlierRun) {
+  const fs::path root = fresh("keep_earlier");
+  const std::string out = (root / "run").string();
+  ASSERT_EQ(ehpt_argv({"run", ehpt::test::source_path("scenarios/ev_sort1.toml"), "--quiet", "--out", out}).exit_code, 0);
+  const std::string earlier = slurp(out + "/summary.json");
+  // a 2M-row cycle: the signal comes while it loads or while the run steps, either way
+  {
+    std::ofstream big(root / "big.csv");
+    big << "time_s,speed_kmh\n";
+    for (int i = 0; i < 2000000; ++i) big << i << ",0\n";
   }
+  std::ofstream(root / "s.toml") << "vehicle_file = \"" << ehpt::test::source_path("vehicles/mbev.toml")
+                                 << "\"\ncycle = \"big.csv\"\n[solver]\nduration_s = 20000\n";
+  const pid_t pid = spawn_ehpt({"run", (root / "s.toml").string(), "--quiet", "--out", out}, "int");
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  kill(pid, SIGINT);
+  const Result r = wait_ehpt(pid, "int");
+  EXPECT_EQ(r.exit_code, 130) << r.err;
+  EXPECT_EQ(slurp(out + "/summary.json"), earlier);  // was: replaced by a 0-step "interrupted" run
+  EXPECT_FALSE(fs::exists(out + ".ehpt-lock"));
 }
 
 TEST(CliOutputs, SigtermAndSighupStopCleanlyWithTheirExitCodes) {
