@@ -73,18 +73,9 @@ class Table1d {
 
   // Run phase: no allocation.
   double operator()(double u) const {
-    if (extrapolation_ == Extrapolation::kHold) {
-      if (u <= x_.front()) return y_.front();
-      if (u >= x_.back()) return y_.back();
-    } else if (extrapolation_ == Extrapolation::kPeriodic && (u < x_.front() || u >= x_.back())) {
-      // period = the axis span; u = x_end starts the next period (the first row applies)
-      const double span = x_.back() - x_.front();
-      double k = std::fmod(u - x_.front(), span);
-      if (k < 0.0) k += span;
-      u = x_.front() + k;
-    }
-    const AxisIndex::Position p = index_.locate(u);
-    return y_[p.i] + p.t * (y_[p.i + 1] - y_[p.i]);
+    // inside the axis (the common case) no extrapolation rule is looked at
+    if (u <= x_.front() || u >= x_.back()) return outside(u);
+    return inside(u);
   }
 
   bool empty() const { return x_.empty(); }
@@ -92,6 +83,28 @@ class Table1d {
   const std::vector<double>& y() const { return y_; }
 
  private:
+  double inside(double u) const {
+    const AxisIndex::Position p = index_.locate(u);
+    return y_[p.i] + p.t * (y_[p.i + 1] - y_[p.i]);
+  }
+  // At or beyond an end of the axis (or NaN): hold, extrapolate linearly, or wrap.
+  [[gnu::noinline]] double outside(double u) const {
+    switch (extrapolation_) {
+      case Extrapolation::kHold:
+        return u <= x_.front() ? y_.front() : y_.back();
+      case Extrapolation::kPeriodic: {
+        // period = the axis span; u = x_end starts the next period (the first row applies)
+        const double span = x_.back() - x_.front();
+        double k = std::fmod(u - x_.front(), span);
+        if (k < 0.0) k += span;
+        return inside(x_.front() + k);
+      }
+      case Extrapolation::kLinear:
+        break;
+    }
+    return inside(u);  // locate() keeps the end segment, its fraction runs past [0, 1]
+  }
+
   std::vector<double> x_, y_;
   Extrapolation extrapolation_ = Extrapolation::kLinear;
   AxisIndex index_;
