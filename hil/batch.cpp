@@ -250,7 +250,10 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
                 run_wall_s > 0 ? sim_s / run_wall_s : 0.0, st.steps_done > 0 ? 1e9 * run_wall_s / st.steps_done : 0.0,
                 wall_s);
   s += buf;
-  if (st.fault != 0) s += "FAULT         " + fault_text(st.fault) + " at t = " + io::number_text(st.fault_time_s) + " s\n";
+  if (st.fault != 0) {
+    s += "FAULT         " + fault_text(st.fault) + " at t = " + io::number_text(st.fault_time_s) + " s (step " +
+         std::to_string(st.fault_step) + ")\n";
+  }
   if (interrupted_by != 0) s += "INTERRUPTED   at t = " + io::number_text(sim_s) + " s; outputs so far kept\n";
   j.strings("warnings", [&] {
     std::vector<std::string> all = sc.warnings;

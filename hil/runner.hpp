@@ -41,6 +41,10 @@ struct RunStats {
   std::int64_t ice_starts = 0;
 };
 
+// How many runs in this process have stopped on a fault: a test guard (tests/support) fails
+// any test whose run raised a fault it did not expect. Touched once per faulted run.
+inline std::atomic<std::int64_t> g_runs_with_fault{0};
+
 // A runner without a controller: the plant's inputs stay as constructed.
 struct NoController {
   template <class Bus>
@@ -158,6 +162,7 @@ class Runner {
       stats_.fault = fault;
       stats_.fault_time_s = t_s;
       stats_.fault_step = n;
+      g_runs_with_fault.fetch_add(1, std::memory_order_relaxed);
     }
     if (n % decimation_ == 0 || n == total_steps_ || fault != 0) record_row_once();
   }

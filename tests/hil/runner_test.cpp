@@ -38,6 +38,7 @@ TEST(Runner, RepeatedRunsAreBitIdenticalWhateverTheChunking) {
 }
 
 TEST(Runner, StopsAtTheFirstFaultAndRecordsIt) {
+  const test::ExpectFault expected;
   plant::BevParams p = test::mbev();
   p.battery.soc_min = 0.6999;  // SOC leaves the window as soon as the car draws power
   const plant::BevPlant plant(p);

@@ -85,6 +85,27 @@ TEST(CoastDown, ChassisDynamometerFormMatchesClosedForm) {
   EXPECT_TRUE(r.locked_at_end);
 }
 
+// The drive's rotor turns with the wheels, so it is decelerated too: a coasting car (driver
+// gain 0, a real rotor of 0.25 kg m^2 behind G/r = 10.5 rad/m) under a constant force f0
+// slows at f0 / (m + J (G/r)^2), 2 % less than f0 / m.
+TEST(CoastDown, TheReflectedRotorInertiaSlowsTheDecelerationExactly) {
+  RoadLoadParams road;
+  road.form = RoadLoadForm::kCoastDown;
+  road.f0_N = 300.0;
+  road.f2_N_s2_m2 = 0.0;
+  BevParams p = coasting_vehicle(road, 20.0);
+  p.driver.gain = 0.0;
+  p.drive.inertia_kgm2 = 0.25;
+  const double g_over_r = p.body.gear_ratio / p.body.wheel_radius_m;
+  const double m_eff = p.body.mass_kg + p.drive.inertia_kgm2 * g_over_r * g_over_r;
+  ASSERT_GT(m_eff - p.body.mass_kg, 20.0);  // the rotor is worth ~28 kg
+  const double h = 1e-3, t_stop = 20.0 * m_eff / 300.0;
+  const CoastResult r = coast(p, h, t_stop + 2.0);
+  EXPECT_NEAR(r.speed_at_10s_m_s, 20.0 - 300.0 * 10.0 / m_eff, 1e-9);
+  EXPECT_NEAR(r.stop_time_s, t_stop, 1e-6 * h);
+  EXPECT_EQ(r.events, 1);
+}
+
 TEST(RoadLoad, ForcesOpposeMotionAndSlopeActsBothWays) {
   RoadLoadParams p;
   p.rolling_coefficient = 0.01;

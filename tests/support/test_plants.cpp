@@ -4,9 +4,42 @@
 
 #include <stdexcept>
 
+#include <gtest/gtest.h>
+
 #include "hil/config.hpp"
+#include "hil/runner.hpp"
 
 namespace ehpt::test {
+
+namespace {
+
+int g_expecting_fault = 0;
+
+// The guard (gtest's own sample10 does its leak check the same way): a failure raised in
+// OnTestEnd belongs to the test that just ran.
+class UnexpectedFaultGuard : public ::testing::EmptyTestEventListener {
+  void OnTestStart(const ::testing::TestInfo&) override {
+    before_ = hil::g_runs_with_fault.load();
+    g_expecting_fault = 0;
+  }
+  void OnTestEnd(const ::testing::TestInfo&) override {
+    const std::int64_t faulted = hil::g_runs_with_fault.load() - before_;
+    EXPECT_TRUE(faulted == 0 || g_expecting_fault > 0)
+        << faulted << " run(s) in this test stopped on a fault it did not expect (test::ExpectFault)";
+  }
+  std::int64_t before_ = 0;
+};
+
+// Registered when a test binary starts (the support library is linked into every one).
+const bool g_guard_registered = [] {
+  ::testing::UnitTest::GetInstance()->listeners().Append(new UnexpectedFaultGuard);
+  return true;
+}();
+
+}  // namespace
+
+ExpectFault::ExpectFault() { ++g_expecting_fault; }
+ExpectFault::~ExpectFault() {}
 
 std::filesystem::path scratch_root() {
   struct Root {

@@ -11,6 +11,17 @@ namespace ehpt::test {
 
 inline std::string source_path(const std::string& rel) { return std::string(EHPT_SOURCE_DIR) + "/" + rel; }
 
+// Every test fails if a run in it (hil::Runner) stopped on a fault, unless it declares an
+// ExpectFault (anywhere in the test): a wrong parameter or a broken equation cannot hide
+// behind a run that quietly ended early.
+class ExpectFault {
+ public:
+  ExpectFault();
+  ~ExpectFault();
+  ExpectFault(const ExpectFault&) = delete;
+  ExpectFault& operator=(const ExpectFault&) = delete;
+};
+
 // This test process's scratch folder, <temp>/ehpt_test_<pid>, made on first use and removed
 // when the process ends: ctest runs every test in a process of its own, so tests that run at
 // the same time (ctest -j, two checkouts, CI next to a developer) never share a path.

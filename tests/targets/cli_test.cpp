@@ -440,6 +440,16 @@ TEST(Cli, HelpListAndSignals) {
 
 // ---- output folders, the plot tool, signals and streams (issue 6) --------------------
 
+// A number of summary.json by key (NaN, and a test failure, if it is not there).
+double json_number(const std::string& summary, const std::string& key) {
+  std::smatch found;
+  if (!std::regex_search(summary, found, std::regex("\"" + key + "\": ([-0-9.e+]+)"))) {
+    ADD_FAILURE() << "no number " << key << " in summary.json";
+    return NAN;
+  }
+  return std::stod(found[1].str());
+}
+
 fs::path fresh(const std::string& name) {
   const fs::path p = ehpt::test::scratch_root() / ("ehpt_cli6_" + name);
   fs::remove_all(p);
@@ -771,18 +781,133 @@ TEST(CliSummary, WhPerKmAgreesWithTheTimeseries) {
   const double terminal = last("battery_out_J") / 3600.0 / km;
   const double emf = (last("battery_out_J") + last("battery_loss_J")) / 3600.0 / km;
   const std::string summary = slurp((root / "run/summary.json").string());
-  const auto value = [&](const std::string& key) {
-    const std::smatch m = [&] {
-      std::smatch found;
-      std::regex_search(summary, found, std::regex("\"" + key + "\": ([-0-9.e+]+)"));
-      return found;
-    }();
-    EXPECT_FALSE(m.empty()) << key;
-    return m.empty() ? NAN : std::stod(m[1].str());
-  };
-  EXPECT_NEAR(value("battery_Wh_per_km"), terminal, 1e-9 * terminal);
-  EXPECT_NEAR(value("battery_emf_Wh_per_km"), emf, 1e-9 * emf);
+  EXPECT_NEAR(json_number(summary, "battery_Wh_per_km"), terminal, 1e-9 * terminal);
+  EXPECT_NEAR(json_number(summary, "battery_emf_Wh_per_km"), emf, 1e-9 * emf);
   EXPECT_NEAR(emf, 116.0, 0.5);
+}
+
+// ---- summary.json against an independent computation from timeseries.csv (issue 7) ------
+
+// A timeseries written at every step, read back as columns by name.
+struct Series {
+  ehpt::io::CsvTable t;
+  const std::vector<double>& operator[](const char* name) const {
+    const int c = t.column_index(name);
+    EXPECT_GE(c, 0) << name;
+    return t.columns[static_cast<std::size_t>(std::max(c, 0))];
+  }
+};
+
+Series every_step(const std::string& scenario, const std::string& signals, const std::string& duration,
+                  const fs::path& out) {
+  std::vector<std::string> args = {"run", ehpt::test::source_path(scenario), "--quiet", "--out", out.string(),
+                                   "--set", "output.interval_s=0.001", "--set", "output.signals=" + signals};
+  if (!duration.empty()) args.insert(args.end(), {"--set", "solver.duration_s=" + duration});
+  const Result r = ehpt_argv(args);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  Series s;
+  std::vector<std::string> errors;
+  EXPECT_TRUE(ehpt::io::read_csv_table((out / "timeseries.csv").string(), s.t, errors));
+  return s;
+}
+
+TEST(CliSummary, EveryMetricOfTheEvAgreesWithItsTimeseries) {
+  const fs::path root = fresh("metrics_ev");
+  const Series s = every_step("scenarios/ev_sort1.toml",
+                              R"(["time_s","speed_ref_m_s","speed_m_s","distance_m","locked","battery_out_J"])", "",
+                              root / "run");
+  const auto& t = s["time_s"];
+  ASSERT_EQ(t.size(), 150001u);  // every grid point of 150 s at 1 ms
+  const double h = t[1] - t[0];
+  double sq = 0.0, max_err = 0.0, locked_s = 0.0;
+  for (std::size_t n = 0; n < t.size(); ++n) {
+    const double e = 3.6 * (s["speed_ref_m_s"][n] - s["speed_m_s"][n]);  // km/h
+    sq += e * e;
+    max_err = std::max(max_err, std::abs(e));
+    if (n > 0 && s["locked"][n] != 0.0) locked_s += h;  // locked at the end of step n
+  }
+  const std::string summary = slurp((root / "run/summary.json").string());
+  const double km = s["distance_m"].back() / 1000.0;
+  EXPECT_NEAR(json_number(summary, "distance_m"), s["distance_m"].back(), 1e-9);
+  EXPECT_NEAR(json_number(summary, "speed_error_rms_kmh"), std::sqrt(sq / static_cast<double>(t.size())), 1e-9);
+  EXPECT_NEAR(json_number(summary, "speed_error_max_kmh"), max_err, 1e-12);
+  EXPECT_NEAR(json_number(summary, "locked_time_s"), locked_s, 1e-6);
+  EXPECT_GT(locked_s, 10.0);  // Sort1 stands still between its three runs
+  EXPECT_NEAR(json_number(summary, "battery_Wh_per_km"), s["battery_out_J"].back() / 3600.0 / km, 1e-9);
+  EXPECT_NEAR(json_number(summary, "battery_energy_J"), s["battery_out_J"].back(), 1e-6);
+  EXPECT_EQ(json_number(summary, "fuel_g"), 0.0);
+}
+
+TEST(CliSummary, EveryMetricOfTheHybridAgreesWithItsTimeseries) {
+  const fs::path root = fresh("metrics_psd");
+  // 300 s: standing, the urban part, the first engine start (145.5 s) and stop
+  const Series s = every_step("scenarios/psecu2_nedc.toml",
+                              R"(["time_s","speed_ref_m_s","speed_m_s","distance_m","locked","iceON","fuel_g"])", "300",
+                              root / "run");
+  const auto& t = s["time_s"];
+  ASSERT_EQ(t.size(), 300001u);
+  const double h = t[1] - t[0];
+  double sq = 0.0, max_err = 0.0, locked_s = 0.0, on_s = 0.0;
+  int starts = s["iceON"][0] != 0.0 ? 1 : 0;
+  for (std::size_t n = 0; n < t.size(); ++n) {
+    const double e = 3.6 * (s["speed_ref_m_s"][n] - s["speed_m_s"][n]);
+    sq += e * e;
+    max_err = std::max(max_err, std::abs(e));
+    if (n > 0 && s["locked"][n] != 0.0) locked_s += h;
+    if (n + 1 < t.size() && s["iceON"][n] != 0.0) on_s += h;  // on during the step that starts at n
+    if (n > 0 && s["iceON"][n] != 0.0 && s["iceON"][n - 1] == 0.0) ++starts;
+  }
+  const std::string summary = slurp((root / "run/summary.json").string());
+  const double fuel_g = s["fuel_g"].back() - s["fuel_g"].front();
+  const double litres = fuel_g / 1000.0 / 745.0 * 1000.0;  // gasoline at 745 kg/m^3 (psecu2.toml)
+  EXPECT_NEAR(json_number(summary, "speed_error_rms_kmh"), std::sqrt(sq / static_cast<double>(t.size())), 1e-9);
+  EXPECT_NEAR(json_number(summary, "speed_error_max_kmh"), max_err, 1e-12);
+  EXPECT_NEAR(json_number(summary, "locked_time_s"), locked_s, 1e-6);
+  EXPECT_NEAR(json_number(summary, "fuel_g"), fuel_g, 1e-9);
+  EXPECT_NEAR(json_number(summary, "fuel_L_per_100km"), litres / (s["distance_m"].back() / 1e5), 1e-9);
+  EXPECT_NEAR(json_number(summary, "ice_on_time_s"), on_s, 1e-6);
+  EXPECT_EQ(json_number(summary, "ice_starts"), starts);
+  EXPECT_GT(on_s, 10.0);
+  EXPECT_EQ(starts, 1);  // 145.5 s; the second start (334.7 s) is after the 300 s
+}
+
+// One run per fault bit, each raised deliberately: exit 3, the fault named in summary.json
+// and on the terminal, the outputs kept.
+TEST(CliFaults, EachFaultBitStopsTheRunWithItsOwnText) {
+  const fs::path root = fresh("faults");
+  struct Case {
+    const char* name;
+    std::string scenario;
+    std::vector<std::string> sets;
+    const char* text;
+  };
+  const std::vector<Case> cases = {
+      {"soc", "scenarios/ev_sort1.toml", {"vehicle.battery.soc_min=0.6999"}, "SOC left [soc_min, soc_max] at t = "},
+      {"current",
+       "scenarios/ev_sort1.toml",
+       {"vehicle.battery.cell_current_max_A=20", "vehicle.battery.r0_cell_Ohm=2.075e-4",
+        "vehicle.battery.cell_current_efficiency_A=500"},
+       "cell current reached cell_current_max_A at t = 4.097 s (step 4097)"},
+      {"power",
+       "scenarios/ev_sort1.toml",
+       {"vehicle.battery.r0_cell_Ohm=0.05", "vehicle.battery.cell_current_efficiency_A=1"},
+       "the drive asked for more power than the battery can give at t = 3.913"},
+      {"nonfinite",
+       "scenarios/one_flange_test.toml",
+       {"vehicle.drive.inertia_kgm2=1e-300", "vehicle.load.inertia_kgm2=0"},
+       "non-finite state (NaN or Inf) at t = 0.001 s (step 1)"},
+  };
+  for (const Case& c : cases) {
+    std::vector<std::string> args = {"run", ehpt::test::source_path(c.scenario), "--out", (root / c.name).string()};
+    for (const auto& s : c.sets) args.insert(args.end(), {"--set", s});
+    const Result r = ehpt_argv(args);
+    EXPECT_EQ(r.exit_code, 3) << c.name << r.err;
+    EXPECT_HAS(r.out, std::string("FAULT         ") + c.text);
+    const std::string summary = slurp((root / c.name / "summary.json").string());
+    EXPECT_HAS(summary, "\"status\": \"fault\"");
+    EXPECT_HAS(summary, std::string("\"fault\": \"") + c.text);
+    EXPECT_TRUE(fs::exists(root / c.name / "timeseries.csv")) << c.name;
+  }
 }
 
 }  // namespace
