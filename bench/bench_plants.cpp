@@ -1,5 +1,6 @@
 // Speed of the plants (Google Benchmark; figures, never test assertions).
-//   BM_BevStep/<solver>:  one fixed step of the map-based EV (NEDC, h = 1 ms): stepper.advance
+//   BM_BevStep/<solver>:  one fixed step of the map-based EV (NEDC, h = 1 ms): sensing, the
+//                         follower ECU and stepper.advance
 //   BM_BevRun/<solver>:   a whole NEDC run through the batch runner (outputs and metrics every
 //                         step, rows every 100); counters: ns_per_step, realtime_factor
 //   BM_Psecu2Step:        the paper's PSecu2 (NEDC, h = 1 ms): ECU update + one advance()
@@ -39,9 +40,14 @@ void BM_BevStep(benchmark::State& state) {
   solvers::EventStepper<plant::BevPlant, Integrator> stepper(plant, integrator, 0.0, 1e-3);
   plant::BevPlant::State x = plant.initial_state();
   plant::BevPlant::Modes m = plant.initial_modes(x);
+  ecu::EvFollower follower;
+  msgs::EvSensors sensors;
+  msgs::EvCommand command;
   std::int64_t n = 0;
   for (auto _ : state) {
-    stepper.advance(n, x, m, {});
+    plant.sense(stepper.time_s(n), x, m, command, sensors);
+    follower.update(sensors, command);
+    stepper.advance(n, x, m, command);
     if (++n == 1184000) {  // wrap around the cycle
       n = 0;
       x = plant.initial_state();
@@ -60,7 +66,9 @@ void BM_BevRun(benchmark::State& state) {
   const plant::BevPlant plant(std::get<plant::BevParams>(sc.plant));
   std::int64_t steps = 0;
   for (auto _ : state) {
-    hil::Runner<plant::BevPlant, Integrator> runner(plant, 1e-3, sc.solver.steps, 100, {0, 1, 2}, sc.solver.steps);
+    ecu::EvFollower follower;
+    hil::Runner<plant::BevPlant, Integrator, ecu::EvFollower> runner(plant, 1e-3, sc.solver.steps, 100, {0, 1, 2},
+                                                                    sc.solver.steps, &follower);
     runner.run();
     steps += runner.step_index();
     benchmark::DoNotOptimize(runner.state());
@@ -80,22 +88,24 @@ void BM_Psecu2Step(benchmark::State& state, const char* scenario) {
   const hil::Scenario sc = load(scenario);
   const auto& p = std::get<plant::PsdParams>(sc.plant);
   const plant::PsdPlant plant(p);
-  plant::PsdEcu ecu(p.ecu, 1e-3);
+  const auto& ecu_params = std::get<ecu::PsdEcuParams>(sc.ecu);
+  ecu::PsdEcu ecu(ecu_params, 1e-3);
   solvers::Rk4<plant::PsdPlant> rk4(plant);
   solvers::EventStepper<plant::PsdPlant, solvers::Rk4<plant::PsdPlant>> stepper(plant, rk4, 0.0, 1e-3);
   plant::PsdPlant::State x = plant.initial_state();
   plant::PsdPlant::Modes m = plant.initial_modes(x);
-  plant::PsdBus bus;
+  msgs::PsdSensors sensors;
+  msgs::PsdCommand bus;
   std::int64_t n = 0;
   for (auto _ : state) {
-    plant.sense(stepper.time_s(n), x, m, bus);
-    ecu.update(bus);
+    plant.sense(stepper.time_s(n), x, m, bus, sensors);
+    ecu.update(sensors, bus);
     stepper.advance(n, x, m, bus);
     if (++n == 1400000) {
       n = 0;
       x = plant.initial_state();
       m = plant.initial_modes(x);
-      ecu = plant::PsdEcu(p.ecu, 1e-3);
+      ecu = ecu::PsdEcu(ecu_params, 1e-3);
     }
     benchmark::DoNotOptimize(x);
   }
@@ -110,8 +120,9 @@ void BM_Psecu2Run_nedc(benchmark::State& state, const char* scenario) {
   const plant::PsdPlant plant(p);
   std::int64_t steps = 0;
   for (auto _ : state) {
-    plant::PsdEcu ecu(p.ecu, 1e-3);
-    hil::Runner<plant::PsdPlant, solvers::Rk4<plant::PsdPlant>, plant::PsdEcu> runner(
+    const auto& ecu_params = std::get<ecu::PsdEcuParams>(sc.ecu);
+  ecu::PsdEcu ecu(ecu_params, 1e-3);
+    hil::Runner<plant::PsdPlant, solvers::Rk4<plant::PsdPlant>, ecu::PsdEcu> runner(
         plant, 1e-3, sc.solver.steps, 100, {0, 1, 2}, sc.solver.steps, &ecu, 1);
     runner.run();
     steps += runner.step_index();

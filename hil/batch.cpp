@@ -85,7 +85,8 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
   text += "\n";
 
   Runner<Plant, Integrator, Controller> runner(plant, sc.solver.step_s, sc.solver.steps, sc.output.decimation,
-                                               columns, kChunkSteps, controller, sc.solver.ecu_ratio);
+                                               columns, kChunkSteps, controller, sc.solver.ecu_ratio,
+                                               sc.solver.ecu_latency_steps);
   typename Plant::Outputs y0 = runner.last_outputs();
   const auto wall_start = std::chrono::steady_clock::now();
   double run_wall_s = 0.0;
@@ -296,12 +297,14 @@ BatchResult run_with_solver(const Scenario& sc, const Plant& plant, const BatchO
 BatchResult run_batch(const Scenario& sc, const BatchOptions& opt, std::ostream& log) {
   if (const auto* p = std::get_if<plant::BevParams>(&sc.plant)) {
     const plant::BevPlant plant(*p);
-    return run_with_solver(sc, plant, opt, log);
+    ecu::EvFollower follower;
+    return run_with_solver(sc, plant, opt, log, &follower);
   }
   if (const auto* p = std::get_if<plant::PsdParams>(&sc.plant)) {
     const plant::PsdPlant plant(*p);
-    plant::PsdEcu ecu(p->ecu, p->ecu.period_s);
-    return run_with_solver(sc, plant, opt, log, &ecu);
+    const auto& params = std::get<ecu::PsdEcuParams>(sc.ecu);
+    ecu::PsdEcu controller(params, params.period_s);
+    return run_with_solver(sc, plant, opt, log, &controller);
   }
   if (const auto* p = std::get_if<plant::BatteryRigParams>(&sc.plant)) {
     const plant::BatteryRig plant(*p);

@@ -589,20 +589,26 @@ plant::MapIceParams read_ice(Reader r, Context& ctx) {
   return p;
 }
 
-plant::PsdEcuParams read_ecu(Reader r, Context& ctx) {
-  plant::PsdEcuParams p;
+// The timing every built-in ECU has: its period and its latency (whole numbers of steps).
+void read_ecu_timing(Reader& r, EcuTiming& t) {
+  t.period_s = r.number("period_s", t.period_s);
+  t.latency_s = r.number("latency_s", t.latency_s);
+}
+
+ecu::PsdEcuParams read_psd_ecu(Reader r, EcuTiming& timing, Context& ctx) {
+  ecu::PsdEcuParams p;
   const std::string kind = r.text("kind", "");
   if (kind == "MBecu1") {
-    p.kind = plant::PsdEcuKind::kMBecu1;
+    p.kind = ecu::PsdEcuKind::kMBecu1;
   } else if (kind == "MBecu1soc") {
-    p.kind = plant::PsdEcuKind::kMBecu1soc;
+    p.kind = ecu::PsdEcuKind::kMBecu1soc;
   } else if (kind == "MBecu2") {
-    p.kind = plant::PsdEcuKind::kMBecu2;
+    p.kind = ecu::PsdEcuKind::kMBecu2;
   } else {
     ctx.error(ctx.where[r.field("kind")], r.field("kind"), "\"" + kind + "\"",
               "must be \"MBecu1\", \"MBecu1soc\" or \"MBecu2\"");
   }
-  p.period_s = r.number("period_s", p.period_s);
+  read_ecu_timing(r, timing);
   p.max_torque_request_Nm = r.number("max_torque_request_Nm", p.max_torque_request_Nm);
   p.power_filter_s = r.number("power_filter_s", p.power_filter_s);
   p.gen_loop_gain_Nm_s_rad = r.required_number("gen_loop_gain_Nm_s_rad");
@@ -618,7 +624,7 @@ plant::PsdEcuParams read_ecu(Reader r, Context& ctx) {
   }
   p.soc_ref = r.number("soc_ref", p.soc_ref);
   // MBecu1 has no SOC loop (PsdEcu ignores the gain); the others need it
-  p.soc_loop_gain_W = p.kind == plant::PsdEcuKind::kMBecu1 ? r.number("soc_loop_gain_W", 0.0)
+  p.soc_loop_gain_W = p.kind == ecu::PsdEcuKind::kMBecu1 ? r.number("soc_loop_gain_W", 0.0)
                                                            : r.required_number("soc_loop_gain_W");
   p.on_threshold_W = r.number("on_threshold_W", p.on_threshold_W);
   p.off_threshold_W = r.number("off_threshold_W", p.off_threshold_W);
@@ -642,9 +648,19 @@ plant::PsdParams read_psd(Reader& root, const FileRef& cycle, bool periodic, Con
     p.ring_sun_ratio = r.number("ring_sun_ratio", p.ring_sun_ratio);
     r.finish();
   }
-  p.ecu = read_ecu(root.sub("ecu"), ctx);
   if (!cycle.empty()) p.driver.cycle_m_s = load_cycle(cycle, "driver.cycle", periodic, ctx);
   return p;
+}
+
+// The EV's built-in ECU: the driver-follower; an optional [ecu] table sets its timing.
+void read_ev_ecu(Reader r, EcuTiming& timing, Context& ctx) {
+  const std::string kind = r.text("kind", "follower");
+  if (kind != "follower") {
+    ctx.error(ctx.where[r.field("kind")], r.field("kind"), "\"" + kind + "\"",
+              "must be \"follower\" (the built-in ECU of the EV; an external one joins over a bus)");
+  }
+  read_ecu_timing(r, timing);
+  r.finish();
 }
 
 plant::BevParams read_bev(Reader& root, const FileRef& cycle, bool periodic, Context& ctx) {
@@ -865,12 +881,15 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
   const auto default_duration = [&](double end_s) {
     if (out.solver.duration_s == 0.0) out.solver.duration_s = end_s;
   };
-  std::optional<double> ecu_period_s;  // vehicles with a built-in ECU
+  bool has_ecu = false;                // vehicles with a built-in ECU
   bool duration_unknown = false;       // from a table or profile that has a problem already
   if (kind == "bev") {
     need_cycle();
     plant::BevParams p = read_bev(vr, cycle_ref, cycle_periodic, ctx);
+    read_ev_ecu(vr.sub("ecu"), out.ecu_timing, ctx);
     vr.finish();
+    has_ecu = true;
+    out.ecu = ecu::EvFollowerParams{};
     if (!p.driver.cycle_m_s.empty()) default_duration(p.driver.cycle_m_s.x().back());
     plant::validate(p, problems);
     if (problems.empty()) plant::warn(p.drive, "drive", warnings);
@@ -879,13 +898,16 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
   } else if (kind == "psd") {
     need_cycle();
     plant::PsdParams p = read_psd(vr, cycle_ref, cycle_periodic, ctx);
+    ecu::PsdEcuParams e = read_psd_ecu(vr.sub("ecu"), out.ecu_timing, ctx);
     vr.finish();
+    ecu::validate(e, "ecu", problems);
+    has_ecu = true;
     if (!p.driver.cycle_m_s.empty()) default_duration(p.driver.cycle_m_s.x().back());
     plant::validate(p, problems);
     if (problems.empty()) {
       plant::warn(p.gen, "gen", warnings);
       plant::warn(p.mot, "mot", warnings);
-      if (p.ecu.kind == plant::PsdEcuKind::kMBecu2 && !p.ice.on_off) {
+      if (e.kind == ecu::PsdEcuKind::kMBecu2 && !p.ice.on_off) {
         warnings.add("ice.on_off", "false",
                      "MBecu2 stops the engine through iceON, which this engine ignores: when OFF only "
                      "icePowRef = 0, and the power loop may still give torque and burn fuel");
@@ -895,9 +917,9 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
                      "the built-in ECUs send icePowRef, not iceTauRef: with them this engine gives no torque");
       }
     }
-    ecu_period_s = p.ecu.period_s;
     check_signals(plant::PsdPlant::kSignals, out.output.signals, ctx);
     out.plant = std::move(p);
+    out.ecu = std::move(e);
   } else if (kind == "drive_rig") {
     no_cycle("a drive rig");
     plant::DriveRigParams p = read_rig(vr, ctx);
@@ -973,16 +995,25 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
                "shorter than the step (" + io::number_text(h) + " s): every step is written");
     }
   }
-  if (ecu_period_s && step_ok) {
-    // the ECU runs every whole number of plant steps (0: every step)
-    const double period_s = *ecu_period_s > 0.0 ? *ecu_period_s : h;
-    const double ratio = period_s / h;
-    out.solver.ecu_ratio = ratio >= 0.5 && ratio < 1e9 ? std::llround(ratio) : 0;
-    if (out.solver.ecu_ratio < 1 || std::abs(ratio - static_cast<double>(out.solver.ecu_ratio)) > 1e-9 * ratio) {
-      ctx.error(ctx.where["ecu.period_s"], "ecu.period_s", io::number_text(*ecu_period_s),
-                "must be a whole multiple of solver.step_s = " + io::number_text(h));
+  if (has_ecu && step_ok) {
+    // the ECU runs every whole number of plant steps (0: every step), and its commands act a
+    // whole number of steps after the sample they were computed from (0: at once)
+    const auto whole_steps = [&](double value_s, const char* field, std::int64_t& steps) {
+      const double ratio = value_s / h;
+      steps = ratio >= 0.0 && ratio < 1e9 ? std::llround(ratio) : -1;
+      if (steps < 0 || std::abs(ratio - static_cast<double>(steps)) > 1e-9 * std::max(1.0, ratio)) {
+        ctx.error(ctx.where[field], field, io::number_text(value_s),
+                  "must be a whole multiple of solver.step_s = " + io::number_text(h) + " (and >= 0)");
+      }
+    };
+    EcuTiming& t = out.ecu_timing;
+    if (t.period_s == 0.0) t.period_s = h;
+    whole_steps(t.period_s, "ecu.period_s", out.solver.ecu_ratio);
+    if (out.solver.ecu_ratio == 0) {
+      ctx.error(ctx.where["ecu.period_s"], "ecu.period_s", io::number_text(t.period_s), "must be > 0 (0: every step)");
     }
-    std::get<plant::PsdParams>(out.plant).ecu.period_s = period_s;
+    whole_steps(t.latency_s, "ecu.latency_s", out.solver.ecu_latency_steps);
+    if (auto* e = std::get_if<ecu::PsdEcuParams>(&out.ecu)) e->period_s = t.period_s;
   }
   for (std::string& w : ctx.warnings) out.warnings.push_back(std::move(w));
   errors = ctx.errors;

@@ -11,6 +11,8 @@
 #include <variant>
 #include <vector>
 
+#include "ecu/ev_follower.hpp"
+#include "ecu/psd_ecu.hpp"
 #include "plant/battery_rig.hpp"
 #include "plant/bev_plant.hpp"
 #include "plant/drive_rigs.hpp"
@@ -31,11 +33,19 @@ struct SolverSettings {
   double duration_s = 0.0;
   std::int64_t steps = 0;  // round(duration_s / step_s)
   std::int64_t ecu_ratio = 1;  // ECU period / step (vehicles with a built-in ECU)
+  std::int64_t ecu_latency_steps = 0;  // a command acts this many steps after its sample
 };
 
 struct OutputSettings {
   std::vector<std::string> signals;  // empty: all of the plant's signals
   std::int64_t decimation = 100;     // write every n-th step (row 0 and the last step always)
+};
+
+// [ecu] period_s (0: every plant step) and latency_s (0: a command acts from the sample it
+// was computed from), both whole multiples of solver.step_s.
+struct EcuTiming {
+  double period_s = 0.0;
+  double latency_s = 0.0;
 };
 
 struct Scenario {
@@ -45,6 +55,9 @@ struct Scenario {
   std::string vehicle_path;
   std::string cycle_path;   // empty for rigs
   std::variant<plant::BevParams, plant::DriveRigParams, plant::PsdParams, plant::BatteryRigParams> plant;
+  // the built-in ECU of vehicles that have one (the EV's follower, MBecu1/1soc/2)
+  std::variant<std::monostate, ecu::EvFollowerParams, ecu::PsdEcuParams> ecu;
+  EcuTiming ecu_timing;
   SolverSettings solver;
   OutputSettings output;
   std::vector<std::string> warnings;  // legal but surprising settings, "file:line: field = value: why"

@@ -13,6 +13,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "msgs/stamp.hpp"
 #include "plant/signals.hpp"
 #include "solvers/event_stepper.hpp"
 
@@ -46,14 +47,27 @@ struct RunStats {
 inline std::atomic<std::int64_t> g_runs_with_fault{0};
 
 // A runner without a controller: the plant's inputs stay as constructed.
-struct NoController {
-  template <class Bus>
-  void update(Bus&) {}
+struct NoController {};
+
+// The sensor message of a plant that has one (Plant::Sensors), else an empty struct.
+template <class Plant>
+struct SensorsOf {
+  struct type {};
+};
+template <class Plant>
+  requires requires { typename Plant::Sensors; }
+struct SensorsOf<Plant> {
+  using type = typename Plant::Sensors;
 };
 
-// Controller: a discrete-time ECU with update(Inputs& bus), run every `controller_ratio`
-// steps. Before each update the plant writes the sensor half of the bus (plant.sense), so
-// the ECU and the plant exchange only that one struct, as a bus will carry it.
+// Controller: a discrete-time ECU, update(const Plant::Sensors&, Plant::Inputs& command), run
+// every `controller_ratio` steps. At its sample step n the plant writes the sensor message
+// (plant.sense at t_n, stamped {t_n, n, sequence}); the command computed from it (stamped
+// with the same sample) applies from step n + latency_steps on and is held until the next
+// one applies. The built-in ECU, a lockstep bus ECU and a recorded session are then the same
+// discrete-time system. latency_steps = 0 (the default): the command acts from the sample
+// it was computed from, as the library's continuous ECUs do and as a lockstep SIL (the plant
+// waits for the command) can honour exactly.
 template <class Plant, class Integrator, class Controller = NoController>
 class Runner {
  public:
@@ -66,10 +80,11 @@ class Runner {
   // may take; the row buffer is sized for it here.
   Runner(const Plant& plant, double h_s, std::int64_t total_steps, std::int64_t decimation,
          std::vector<int> columns, std::int64_t chunk_steps, Controller* controller = nullptr,
-         std::int64_t controller_ratio = 1)
+         std::int64_t controller_ratio = 1, std::int64_t latency_steps = 0)
       : plant_(plant),
         controller_(controller),
         controller_ratio_(controller_ratio),
+        latency_steps_(latency_steps),
         integrator_(plant),
         stepper_(plant, integrator_, 0.0, h_s),
         total_steps_(total_steps),
@@ -78,6 +93,8 @@ class Runner {
         columns_(std::move(columns)) {
     for (int c : columns_) members_.push_back(plant.signals()[static_cast<std::size_t>(c)].member);
     rows_.resize(static_cast<std::size_t>((chunk_steps_ / decimation_ + 4) * static_cast<std::int64_t>(columns_.size())));
+    // commands in flight: one per ECU period of latency, and one more
+    pending_.resize(static_cast<std::size_t>(latency_steps_ / std::max<std::int64_t>(1, controller_ratio_) + 2));
     x0_ = plant.initial_state();
     x_ = x0_;
     m_ = plant.initial_modes(x_);
@@ -123,12 +140,28 @@ class Runner {
   void clear_rows() { row_count_ = 0; }
 
  private:
-  // Run phase: the ECU samples the plant at t_n and sets the inputs for the next period.
+  // Run phase: commands that are due apply; at a sample step the ECU reads the sensors at
+  // t_n and computes its next command (applied now, or latency_steps later).
   void tick_controller(std::int64_t n) {
     if constexpr (!std::is_same_v<Controller, NoController>) {
-      if (controller_ != nullptr && n % controller_ratio_ == 0) {
-        plant_.sense(stepper_.time_s(n), x_, m_, inputs_);
-        controller_->update(inputs_);
+      if (controller_ == nullptr) return;
+      while (pending_count_ > 0 && pending_[pending_head_].apply_step <= n) {
+        inputs_ = pending_[pending_head_].command;
+        pending_head_ = (pending_head_ + 1) % pending_.size();
+        --pending_count_;
+      }
+      if (n % controller_ratio_ != 0) return;
+      const msgs::Stamp stamp{stepper_.time_s(n), n, sensor_sequence_++};
+      sensors_.stamp = stamp;
+      plant_.sense(stamp.time_s, x_, m_, inputs_, sensors_);
+      Inputs command = inputs_;  // what the ECU does not set stays as it was
+      controller_->update(sensors_, command);
+      command.stamp = msgs::Stamp{stamp.time_s, stamp.step, command_sequence_++};
+      if (latency_steps_ == 0) {
+        inputs_ = command;
+      } else if (pending_count_ < pending_.size()) {  // sized so that it cannot be full
+        pending_[(pending_head_ + pending_count_) % pending_.size()] = {n + latency_steps_, command};
+        ++pending_count_;
       }
     }
   }
@@ -181,7 +214,14 @@ class Runner {
 
   const Plant& plant_;
   Controller* controller_;
-  std::int64_t controller_ratio_;
+  std::int64_t controller_ratio_, latency_steps_;
+  struct Pending {
+    std::int64_t apply_step = 0;
+    Inputs command{};
+  };
+  std::vector<Pending> pending_;  // ring of commands not applied yet
+  std::size_t pending_head_ = 0, pending_count_ = 0;
+  std::uint32_t sensor_sequence_ = 0, command_sequence_ = 0;
   bool ice_was_on_ = false;
   std::int64_t ice_on_steps_ = 0, locked_steps_ = 0;  // counted, not summed: exact times
   Integrator integrator_;
@@ -196,6 +236,7 @@ class Runner {
   State x0_, x_;
   Modes m_{};
   Inputs inputs_{};
+  typename SensorsOf<Plant>::type sensors_{};
   Outputs y_{};
   RunStats stats_;
 };

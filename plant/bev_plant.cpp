@@ -30,13 +30,14 @@ void validate(const BevParams& p, Problems& problems) {
   }
 }
 
-const std::array<Signal<BevPlant::Outputs>, 30> BevPlant::kSignals = {{
+const std::array<Signal<BevPlant::Outputs>, 31> BevPlant::kSignals = {{
     {"time_s", &Outputs::time_s, "simulation time"},
     {"speed_ref_m_s", &Outputs::speed_ref_m_s, "cycle (wanted) speed"},
     {"speed_m_s", &Outputs::speed_m_s, "vehicle speed"},
     {"distance_m", &Outputs::distance_m, "travelled distance"},
     {"acceleration_m_s2", &Outputs::acceleration_m_s2, "vehicle acceleration"},
-    {"driver_request_Nm", &Outputs::driver_request_Nm, "driver torque request at the drive shaft"},
+    {"driver_request_Nm", &Outputs::driver_request_Nm, "driver torque request at the drive shaft (driverRequest)"},
+    {"drive_torque_ref_Nm", &Outputs::drive_torque_ref_Nm, "torque the ECU asks of the drive (driveTauRef)"},
     {"drive_torque_Nm", &Outputs::drive_torque_Nm, "torque the drive applies (after the limiter)"},
     {"drive_torque_limit_Nm", &Outputs::drive_torque_limit_Nm, "limiter bound yH (genTauLim)"},
     {"drive_limit_state", &Outputs::drive_limit_state, "limiter state 0 torque, 1 power, 2 speed ramp, 3 over speed"},
@@ -64,7 +65,6 @@ const std::array<Signal<BevPlant::Outputs>, 30> BevPlant::kSignals = {{
 }};
 
 struct BevPlant::Eval {
-  DriverOutput driver;
   DriveOperatingPoint drive;
   BatteryTerminal battery;
   double drive_speed_rad_s;
@@ -99,17 +99,16 @@ BevPlant::Modes BevPlant::initial_modes(const State& x0) const {
 }
 
 // Run phase: no allocation. Always inlined, so that each caller computes only what it uses.
-[[gnu::always_inline]] inline BevPlant::Eval BevPlant::evaluate(double t_s, const State& x, const Modes& m) const {
+[[gnu::always_inline]] inline BevPlant::Eval BevPlant::evaluate(const State& x, const Modes& m, const Inputs& u) const {
   const double v = x[kSpeed];
-  // driver and drive: the driver's request is a shaft torque, the limiter may cut it
-  const DriverOutput driver = drive(p_.driver, t_s, v);
+  // the drive follows the ECU's command, a shaft torque; the limiter may cut it
   const double drive_speed_rad_s = v * g_over_r_;
-  const DriveOperatingPoint op = drive_.operate(driver.request, drive_speed_rad_s);
+  const DriveOperatingPoint op = drive_.operate(u.driveTauRef_Nm, drive_speed_rad_s);
   // forces at the wheel; the friction brake supplies the braking the drive could not
   const double grade_rad = road_.grade_rad(x[kDistance]);
   const double rolling_N = road_.rolling_N(grade_rad);
   const double speed_force_N = road_.speed_force_N(v);
-  const double unmet_braking_Nm = op.torque_Nm - driver.request;
+  const double unmet_braking_Nm = op.torque_Nm - u.driveTauRef_Nm;
   double brake_N = unmet_braking_Nm > 0.0 ? brake_gain_ * unmet_braking_Nm : 0.0;
   const double tractive_N = op.torque_Nm * g_over_r_;
   const double applied_N = tractive_N - road_.grade_force_N(grade_rad);
@@ -134,8 +133,7 @@ BevPlant::Modes BevPlant::initial_modes(const State& x0) const {
     }
   }
   // the battery supplies the drive's DC power
-  return Eval{.driver = driver,
-              .drive = op,
+  return Eval{.drive = op,
               .battery = battery_.terminal(x[kEmf], x[kVrc], op.power_dc_W),
               .drive_speed_rad_s = drive_speed_rad_s,
               .grade_rad = grade_rad,
@@ -147,9 +145,9 @@ BevPlant::Modes BevPlant::initial_modes(const State& x0) const {
               .accel_m_s2 = accel_m_s2};
 }
 
-BevPlant::AtRest BevPlant::at_rest(double t_s, const State& x) const {
+BevPlant::AtRest BevPlant::at_rest(const State& x, const Inputs& u) const {
   // same equations as evaluate() with v = 0: drive speed 0, so the limit is tau_max (state 0)
-  const double request_Nm = drive(p_.driver, t_s, 0.0).request;
+  const double request_Nm = u.driveTauRef_Nm;
   const double tau_max_Nm = drive_.params().torque_max_Nm;
   const double torque_Nm = std::clamp(request_Nm, -tau_max_Nm, tau_max_Nm);
   const double unmet_braking_Nm = torque_Nm - request_Nm;
@@ -158,8 +156,8 @@ BevPlant::AtRest BevPlant::at_rest(double t_s, const State& x) const {
   return {torque_Nm * g_over_r_ - road_.grade_force_N(grade_rad), road_.rolling_N(grade_rad) + brake_N};
 }
 
-void BevPlant::derivatives(double t_s, const State& x, const Modes& m, const Inputs&, State& dx) const {
-  const Eval e = evaluate(t_s, x, m);
+void BevPlant::derivatives(double, const State& x, const Modes& m, const Inputs& u, State& dx) const {
+  const Eval e = evaluate(x, m, u);
   const double v = x[kSpeed];
   const double speed_abs = std::abs(v);
   dx[kSpeed] = e.accel_m_s2;
@@ -175,7 +173,7 @@ void BevPlant::derivatives(double t_s, const State& x, const Modes& m, const Inp
   dx[kBrakeJ] = e.brake_N * speed_abs;
 }
 
-void BevPlant::crossings(double t_s, const State& x, const Modes& m, const Inputs&, double* z) const {
+void BevPlant::crossings(double, const State& x, const Modes& m, const Inputs& u, double* z) const {
   switch (m.motion) {
     case Motion::kForward:
       z[0] = x[kSpeed];
@@ -184,29 +182,46 @@ void BevPlant::crossings(double t_s, const State& x, const Modes& m, const Input
       z[0] = -x[kSpeed];
       break;
     case Motion::kStuck: {
-      const AtRest r = at_rest(t_s, x);
+      const AtRest r = at_rest(x, u);
       z[0] = r.breakaway_N - std::abs(r.applied_N);
       break;
     }
   }
 }
 
-void BevPlant::on_crossing(int, double t_s, State& x, Modes& m, const Inputs&) const {
+void BevPlant::on_crossing(int, double, State& x, Modes& m, const Inputs& u) const {
   if (m.motion != Motion::kStuck) x[kSpeed] = 0.0;  // came to rest: exactly zero
   // at rest (just stopped or stuck): stay, or start in the direction of the applied force;
   // a crossing that fired from the stuck mode starts by construction, a stop may stay stuck
-  const AtRest r = at_rest(t_s, x);
+  const AtRest r = at_rest(x, u);
   m.motion = motion_at_rest(r.applied_N, r.breakaway_N);
 }
 
-void BevPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs&, Outputs& y) const {
-  const Eval e = evaluate(t_s, x, m);
+void BevPlant::sense(double t_s, const State& x, const Modes& m, const Inputs& u, Sensors& s) const {
+  const Eval e = evaluate(x, m, u);
+  s.driverRequest_Nm = drive(p_.driver, t_s, x[kSpeed]).request;
+  s.speed_m_s = x[kSpeed];
+  s.driveW_rad_s = e.drive_speed_rad_s;
+  s.driveTauLim_Nm = e.drive.limit_Nm;
+  s.drivePowDel_W = e.drive.power_mech_W;
+  s.batSOC = battery_.soc(x[kEmf]);
+  s.batPowDel_W = e.battery.voltage_V * e.battery.current_A;
+  s.battery_voltage_V = e.battery.voltage_V;
+  s.battery_current_A = e.battery.current_A;
+  s.fault = battery_.faults(x[kEmf], e.battery) | (x.allFinite() ? 0u : kFaultNonFinite);
+  s.locked = m.motion == Motion::kStuck;
+}
+
+void BevPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const {
+  const Eval e = evaluate(x, m, u);
+  const DriverOutput driver = drive(p_.driver, t_s, x[kSpeed]);
   y.time_s = t_s;
-  y.speed_ref_m_s = e.driver.speed_ref_m_s;
+  y.speed_ref_m_s = driver.speed_ref_m_s;
   y.speed_m_s = x[kSpeed];
   y.distance_m = x[kDistance];
   y.acceleration_m_s2 = e.accel_m_s2;
-  y.driver_request_Nm = e.driver.request;
+  y.driver_request_Nm = driver.request;
+  y.drive_torque_ref_Nm = u.driveTauRef_Nm;
   y.drive_torque_Nm = e.drive.torque_Nm;
   y.drive_torque_limit_Nm = e.drive.limit_Nm;
   y.drive_limit_state = e.drive.limit_state;

@@ -4,8 +4,11 @@
 // the vehicle of §7.4. Paper: P15 §5.1 (same structure as EvPm_bat, map-based drive).
 //
 //   driver:   tau_req = clamp(k (v_ref(t) - v), -yMax, yMax)            (N m at the drive shaft)
-//   drive:    w = v G / r;  tau = clamp(tau_req, -tau_lim(w), tau_lim(w));  P_dc from the map
-//   brake:    the braking the drive cannot deliver: F_brake = (G / r) max(0, tau - tau_req),
+//             the person at the wheel, part of the plant: a sensor (driverRequest_Nm) for the ECU
+//   ECU:      tau_cmd, the command (msgs::EvCommand, the plant's Inputs), held over each ECU
+//             period; the built-in ECU (ecu::EvFollower) sets tau_cmd = tau_req at each sample
+//   drive:    w = v G / r;  tau = clamp(tau_cmd, -tau_lim(w), tau_lim(w));  P_dc from the map
+//   brake:    the braking the drive cannot deliver: F_brake = (G / r) max(0, tau - tau_cmd),
 //             opposing motion (MBEV's gain G*r is a source defect, §10.3; flag brake_library_gain).
 //             brake.after_rotor_inertia: MBEV's signal, max(0, tau - J dw/dt - tau_req); with
 //             dw/dt = (G/r) dv/dt this is an algebraic loop, linear on each branch, solved
@@ -31,6 +34,7 @@
 
 #include <Eigen/Core>
 
+#include "msgs/ev.hpp"
 #include "plant/battery_rc.hpp"
 #include "plant/map_drive.hpp"
 #include "plant/prop_driver.hpp"
@@ -85,18 +89,20 @@ class BevPlant {
   struct Modes {
     Motion motion = Motion::kStuck;
   };
-  struct Inputs {};  // the driver is part of this plant; an external ECU will add fields here
+  using Inputs = msgs::EvCommand;  // held over each ECU period
+  using Sensors = msgs::EvSensors;
 
   struct Outputs {
     double time_s = 0, speed_ref_m_s = 0, speed_m_s = 0, distance_m = 0, acceleration_m_s2 = 0;
-    double driver_request_Nm = 0, drive_torque_Nm = 0, drive_torque_limit_Nm = 0, drive_limit_state = 0;
+    double driver_request_Nm = 0, drive_torque_ref_Nm = 0, drive_torque_Nm = 0, drive_torque_limit_Nm = 0;
+    double drive_limit_state = 0;
     double drive_limiting = 0, drive_speed_rad_s = 0, drive_power_mech_W = 0, drive_power_dc_W = 0;
     double drive_efficiency = 0, brake_force_N = 0, road_force_N = 0, grade_rad = 0, altitude_m = 0;
     double battery_voltage_V = 0, battery_current_A = 0, battery_power_W = 0, battery_emf_V = 0, soc = 0;
     double locked = 0, fault = 0;
     double battery_out_J = 0, road_work_J = 0, drive_loss_J = 0, battery_loss_J = 0, brake_work_J = 0;
   };
-  static const std::array<Signal<Outputs>, 30> kSignals;
+  static const std::array<Signal<Outputs>, 31> kSignals;
 
   explicit BevPlant(const BevParams& params);  // start-up: params already validated
 
@@ -108,6 +114,8 @@ class BevPlant {
   void crossings(double t_s, const State& x, const Modes& m, const Inputs& u, double* z) const;
   void on_crossing(int index, double t_s, State& x, Modes& m, const Inputs& u) const;
   void outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const;
+  // What the ECU reads at t_s (the stamp is the runner's).
+  void sense(double t_s, const State& x, const Modes& m, const Inputs& u, Sensors& s) const;
 
   std::span<const Signal<Outputs>> signals() const { return kSignals; }
   // Energy audit between x0 and x (end of run; allocates).
@@ -117,14 +125,14 @@ class BevPlant {
   const BatteryRc& battery() const { return battery_; }
 
  private:
-  struct Eval;  // everything one evaluation computes
-  Eval evaluate(double t_s, const State& x, const Modes& m) const;
+  struct Eval;  // everything one evaluation computes (the driver is not needed for it)
+  Eval evaluate(const State& x, const Modes& m, const Inputs& u) const;
   // At rest (v = 0): the force the road must hold, and the break-away threshold. A lean
   // version of evaluate() for the stuck-mode crossing, which runs twice per step.
   struct AtRest {
     double applied_N, breakaway_N;
   };
-  AtRest at_rest(double t_s, const State& x) const;
+  AtRest at_rest(const State& x, const Inputs& u) const;
 
   BevParams p_;
   MapDrive drive_;

@@ -16,7 +16,6 @@ void validate(const PsdParams& p, Problems& problems) {
     problems.add("planetary.ring_sun_ratio", number_text(p.ring_sun_ratio),
                  "must be > 1 (the ring has more teeth than the sun)");
   }
-  validate(p.ecu, "ecu", problems);
   if (p.brake.after_rotor_inertia) {
     problems.add("brake.after_rotor_inertia", "true", "only the map-based EV (kind = \"bev\") has this option");
   }
@@ -184,11 +183,11 @@ void PsdPlant::on_crossing(int, double t_s, State& x, Modes& m, const Inputs& u)
   m.motion = motion_at_rest(e.applied_N, e.rolling_N + e.brake_N);
 }
 
-void PsdPlant::sense(double t_s, const State& x, const Modes& m, PsdBus& bus) const {
-  sense_from(evaluate(t_s, x, m, bus), x, m, bus);
+void PsdPlant::sense(double t_s, const State& x, const Modes& m, const Inputs& u, Sensors& s) const {
+  sense_from(evaluate(t_s, x, m, u), x, m, s);
 }
 
-void PsdPlant::sense_from(const Eval& e, const State& x, const Modes& m, PsdBus& bus) const {
+void PsdPlant::sense_from(const Eval& e, const State& x, const Modes& m, Sensors& bus) const {
   const double w_c = x[kIceSpeed], w_r = x[kRingSpeed];
   const double sun_accel = (1.0 + rho_) * e.ice_accel_rad_s2 - rho_ * e.ring_accel_rad_s2;
   bus.driverRequest = e.driver.request;
@@ -209,11 +208,16 @@ void PsdPlant::sense_from(const Eval& e, const State& x, const Modes& m, PsdBus&
   bus.motTauLim_Nm = e.mot.limit_Nm;
   bus.batSOC = battery_.soc(x[kEmf]);
   bus.batPowDel_W = e.battery.voltage_V * e.battery.current_A;
+  bus.speed_m_s = e.speed_m_s;
+  bus.battery_voltage_V = e.battery.voltage_V;
+  bus.battery_current_A = e.battery.current_A;
+  bus.fault = battery_.faults(x[kEmf], e.battery) | (x.allFinite() ? 0u : kFaultNonFinite);
+  bus.locked = m.motion == Motion::kStuck;
 }
 
 void PsdPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const {
   const Eval e = evaluate(t_s, x, m, u);
-  PsdBus bus = u;
+  Sensors bus;
   sense_from(e, x, m, bus);
   y.time_s = t_s;
   y.speed_ref_m_s = e.driver.speed_ref_m_s;
@@ -248,8 +252,8 @@ void PsdPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs&
   y.battery_current_A = e.battery.current_A;
   y.battery_power_W = bus.batPowDel_W;
   y.soc = bus.batSOC;
-  y.locked = m.motion == Motion::kStuck ? 1.0 : 0.0;
-  y.fault = battery_.faults(x[kEmf], e.battery) | (x.allFinite() ? 0u : kFaultNonFinite);
+  y.locked = bus.locked ? 1.0 : 0.0;
+  y.fault = bus.fault;
 }
 
 double PsdPlant::kinetic_energy_J(const State& x) const {

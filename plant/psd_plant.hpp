@@ -4,7 +4,9 @@
 //
 // Wiring (§4.2): ICE -- carrier; gen (one-flange drive) -- sun; ring -- mot (two-flange
 // drive) flange A; mot flange B -- final gear G -- wheels (r) -- vehicle mass m -- DragForce.
-// gen and mot share the battery's DC bus. The ECU talks to the plant only through PsdBus.
+// gen and mot share the battery's DC bus. The ECU (ecu/, or an external one on a bus) talks to
+// the plant only through messages: the plant's Inputs are msgs::PsdCommand, sense() fills
+// msgs::PsdSensors.
 //
 // Planetary gear (§4.1), rho = z_ring / z_sun, massless and lossless (Willis):
 //   (1 + rho) w_c = w_s + rho w_r,    tau_r = rho tau_s,   tau_c = -(1 + rho) tau_s
@@ -41,8 +43,7 @@
 #include "plant/map_drive.hpp"
 #include "plant/map_ice.hpp"
 #include "plant/prop_driver.hpp"
-#include "plant/psd_bus.hpp"
-#include "plant/psd_ecu.hpp"
+#include "msgs/psd.hpp"
 #include "plant/road_load.hpp"
 #include "plant/signals.hpp"
 
@@ -58,7 +59,6 @@ struct PsdParams {
   MapDriveParams gen;          // one-flange drive on the sun
   MapDriveParams mot;          // two-flange drive on the ring
   double ring_sun_ratio = 78.0 / 30.0;
-  PsdEcuParams ecu;
 };
 
 void validate(const PsdParams& p, Problems& problems);
@@ -75,7 +75,8 @@ class PsdPlant {
   struct Modes {
     Motion motion = Motion::kStuck;
   };
-  using Inputs = PsdBus;  // the plant reads the command half
+  using Inputs = msgs::PsdCommand;  // held over each ECU period
+  using Sensors = msgs::PsdSensors;
 
   struct Outputs {
     double time_s = 0, speed_ref_m_s = 0, speed_m_s = 0, distance_m = 0, driverRequest = 0;
@@ -102,8 +103,8 @@ class PsdPlant {
   void crossings(double t_s, const State& x, const Modes& m, const Inputs& u, double* z) const;
   void on_crossing(int index, double t_s, State& x, Modes& m, const Inputs& u) const;
   void outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const;
-  // Writes the sensor half of the bus (what the ECU reads at t_s).
-  void sense(double t_s, const State& x, const Modes& m, PsdBus& bus) const;
+  // What the ECU reads at t_s (the stamp is the runner's).
+  void sense(double t_s, const State& x, const Modes& m, const Inputs& u, Sensors& s) const;
 
   EnergyAudit audit(const State& x0, const State& x) const;
   const PsdParams& params() const { return p_; }
@@ -127,7 +128,7 @@ class PsdPlant {
     }
     return 0.0;
   }
-  void sense_from(const Eval& e, const State& x, const Modes& m, PsdBus& bus) const;
+  void sense_from(const Eval& e, const State& x, const Modes& m, Sensors& s) const;
 
   PsdParams p_;
   MapIce ice_;

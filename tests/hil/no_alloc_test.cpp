@@ -35,8 +35,8 @@ TEST(NoAllocation, PowerSplitHybridWithItsEcu) {
   const hil::Scenario sc = test::load(test::source_path("scenarios/psecu2_nedc.toml"));
   const auto& p = std::get<plant::PsdParams>(sc.plant);
   const plant::PsdPlant plant(p);
-  plant::PsdEcu ecu(p.ecu, 1e-3);
-  using R = Runner<plant::PsdPlant, solvers::Rk4<plant::PsdPlant>, plant::PsdEcu>;
+  ecu::PsdEcu ecu(std::get<ecu::PsdEcuParams>(sc.ecu), 1e-3);
+  using R = Runner<plant::PsdPlant, solvers::Rk4<plant::PsdPlant>, ecu::PsdEcu>;
   R runner(plant, 1e-3, 400000, 100, {0, 1, 2}, 400000, &ecu, 1);  // start-up: may allocate
   const std::size_t before = test::allocation_count();
   runner.run();  // run phase: 400 s, through engine starts at 145.5 s and 334.7 s and their stops

@@ -50,13 +50,15 @@ TEST(ReferenceRuns, PaperPsecu2OnNedc) {
   const Scenario sc = test::load(test::source_path("scenarios/psecu2_nedc.toml"));
   const auto& p = std::get<plant::PsdParams>(sc.plant);
   const plant::PsdPlant plant(p);
-  plant::PsdEcu ecu(p.ecu, p.ecu.period_s);
-  compare(sc, plant, reference("psecu2_nedc.csv"), &ecu);
+  const auto& e = std::get<ecu::PsdEcuParams>(sc.ecu);
+  ecu::PsdEcu controller(e, e.period_s);
+  compare(sc, plant, reference("psecu2_nedc.csv"), &controller);
 }
 
 TEST(ReferenceRuns, MapBasedEvOnNedc) {
   const Scenario sc = test::load(test::source_path("scenarios/ev_nedc.toml"));
-  compare(sc, plant::BevPlant(std::get<plant::BevParams>(sc.plant)), reference("ev_nedc.csv"));
+  ecu::EvFollower follower;
+  compare(sc, plant::BevPlant(std::get<plant::BevParams>(sc.plant)), reference("ev_nedc.csv"), &follower);
 }
 
 TEST(ReferenceRuns, TestMBOneFlange) {

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <vector>
 
+#include "ecu/ev_follower.hpp"
 #include "hil/config.hpp"
 #include "solvers/event_stepper.hpp"
 #include "solvers/integrators.hpp"
@@ -35,6 +36,8 @@ DriveSummary drive_cycle(const BevParams& params, double h_s, double duration_s)
   BevPlant::State x = plant.initial_state();
   const BevPlant::State x0 = x;
   BevPlant::Modes m = plant.initial_modes(x);
+  ecu::EvFollower follower;  // the built-in ECU, every step
+  BevPlant::Inputs command;
   DriveSummary s;
   double sq = 0.0;
   const auto steps = std::llround(duration_s / h_s);
@@ -51,7 +54,7 @@ DriveSummary drive_cycle(const BevParams& params, double h_s, double duration_s)
   std::size_t next_check = 0;
   for (std::int64_t n = 0; n <= steps; ++n) {
     BevPlant::Outputs y;
-    plant.outputs(stepper.time_s(n), x, m, {}, y);
+    plant.outputs(stepper.time_s(n), x, m, command, y);
     const double e = 3.6 * (y.speed_ref_m_s - y.speed_m_s);
     sq += e * e;
     s.max_kmh = std::max(s.max_kmh, std::abs(e));
@@ -62,7 +65,7 @@ DriveSummary drive_cycle(const BevParams& params, double h_s, double duration_s)
       ++next_check;
     }
     if (n == steps) break;
-    const solvers::StepReport r = stepper.advance(n, x, m, {});
+    const solvers::StepReport r = test::step_with_ecu(plant, stepper, follower, n, x, m, command);
     s.events += r.events;
     s.chattering += r.chattering ? 1 : 0;
     if (r.events > 0) s.event_times_s.push_back(r.event_time_s);
@@ -113,7 +116,9 @@ TEST(BevOnSort1, ImplicitEulerAgreesWithRk4) {
 }
 
 TEST(BevBreakAway, StartsWhenTheDriveForceExceedsRollingResistance) {
-  // v_ref = a t: stuck until k a t (G / r) = f m g, located inside the step
+  // v_ref = a t: the driver's request k a t crosses f m g (r / G) at t_break; the ECU samples
+  // it every step and its command acts from the sample on, so the car starts at the first
+  // grid point at or after t_break, exactly there (a crossing below zero at a segment start)
   BevParams p = test::mbev();
   const double a = 1.0;
   p.driver.cycle_m_s = Table1d({0.0, 10.0}, {0.0, 10.0 * a}, Extrapolation::kHold);
@@ -122,7 +127,9 @@ TEST(BevBreakAway, StartsWhenTheDriveForceExceedsRollingResistance) {
   const double h = 1e-3;
   const DriveSummary s = drive_cycle(p, h, 1.0);
   ASSERT_EQ(s.events, 1);
-  EXPECT_NEAR(s.event_times_s[0], t_break, 1e-6 * h);
+  EXPECT_NEAR(s.event_times_s[0], std::ceil(t_break / h) * h, 1e-12);
+  EXPECT_GT(s.event_times_s[0], t_break - 1e-12);
+  EXPECT_LT(s.event_times_s[0], t_break + h);
 }
 
 TEST(BevStiction, HeldBelowBreakAwayWithoutChattering) {
@@ -193,26 +200,30 @@ TEST(BevBrake, AfterRotorInertiaSolvesItsLoopExactly) {
   solvers::EventStepper<BevPlant, solvers::Rk4<BevPlant>> stepper(plant, rk4, 0.0, 1e-3);
   BevPlant::State x = plant.initial_state();
   BevPlant::Modes m = plant.initial_modes(x);
+  ecu::EvFollower follower;
+  BevPlant::Inputs command;
   const double g_over_r = p.body.gear_ratio / p.body.wheel_radius_m;
   const double k = brake_gain_N_per_Nm(p.brake, p.body);
   int braking_unlimited = 0, checked = 0;
   double seen_t = -1.0;
   BevPlant::State seen_x = x;
+  BevPlant::Inputs seen_command;
   for (std::int64_t n = 0; n < 1200000; ++n) {
     if (n % 100 == 0 && m.motion == Motion::kForward) {
       BevPlant::Outputs y;
-      plant.outputs(stepper.time_s(n), x, m, {}, y);
+      plant.outputs(stepper.time_s(n), x, m, command, y);
       const double signal_Nm = y.drive_torque_Nm - p.drive.inertia_kgm2 * g_over_r * y.acceleration_m_s2 -
-                               y.driver_request_Nm;
+                               y.drive_torque_ref_Nm;
       ASSERT_NEAR(y.brake_force_N, k * std::max(0.0, signal_Nm), 1e-9 * (1.0 + y.brake_force_N)) << y.time_s;
       if (y.brake_force_N > 0.0 && y.drive_limiting == 0.0) {
         ++braking_unlimited;
         seen_t = y.time_s;
         seen_x = x;
+        seen_command = command;
       }
       ++checked;
     }
-    stepper.advance(n, x, m, {});
+    test::step_with_ecu(plant, stepper, follower, n, x, m, command);
   }
   EXPECT_GT(checked, 5000);
   EXPECT_GT(braking_unlimited, 100);
@@ -221,7 +232,7 @@ TEST(BevBrake, AfterRotorInertiaSolvesItsLoopExactly) {
   BevParams q = p;
   q.brake.after_rotor_inertia = false;
   BevPlant::Outputs y;
-  BevPlant(q).outputs(seen_t, seen_x, {Motion::kForward}, {}, y);
+  BevPlant(q).outputs(seen_t, seen_x, {Motion::kForward}, seen_command, y);
   EXPECT_EQ(y.drive_limiting, 0.0);
   EXPECT_EQ(y.brake_force_N, 0.0);
 }

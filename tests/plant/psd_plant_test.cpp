@@ -12,16 +12,24 @@
 namespace ehpt::plant {
 namespace {
 
+using ecu::PsdEcu;
+using ecu::PsdEcuParams;
 using PsdRunner = hil::Runner<PsdPlant, solvers::Rk4<PsdPlant>, PsdEcu>;
 
-PsdParams psecu(const std::string& scenario, const std::vector<std::string>& overrides = {}) {
-  return std::get<PsdParams>(test::load(test::source_path("scenarios/" + scenario), overrides).plant);
+// A PSecu scenario's plant and ECU, through the real loader.
+struct Psecu {
+  PsdParams plant;
+  PsdEcuParams ecu;
+};
+Psecu psecu(const std::string& scenario, const std::vector<std::string>& overrides = {}) {
+  const hil::Scenario sc = test::load(test::source_path("scenarios/" + scenario), overrides);
+  return {std::get<PsdParams>(sc.plant), std::get<PsdEcuParams>(sc.ecu)};
 }
 
 // Steps a PSD vehicle with its ECU every step of 1 ms and calls f(n, t, x, modes, bus, outputs).
 template <class F>
-hil::RunStats drive(const PsdParams& p, double duration_s, F f, EnergyAudit* audit = nullptr) {
-  const PsdPlant plant(p);
+hil::RunStats drive(const Psecu& p, double duration_s, F f, EnergyAudit* audit = nullptr) {
+  const PsdPlant plant(p.plant);
   PsdEcu ecu(p.ecu, 1e-3);
   const auto steps = std::llround(duration_s / 1e-3);
   PsdRunner runner(plant, 1e-3, steps, steps, {0}, 1, &ecu, 1);  // one step per run(): observe each
@@ -35,11 +43,12 @@ hil::RunStats drive(const PsdParams& p, double duration_s, F f, EnergyAudit* aud
 }
 
 TEST(Planetary, WillisAndTheTorqueBalanceHoldAtEveryStep) {
-  const PsdParams p = psecu("psecu2_nedc.toml");
+  const Psecu setup = psecu("psecu2_nedc.toml");
+  const PsdParams& p = setup.plant;
   const PsdPlant plant(p);
   const double rho = p.ring_sun_ratio, ratio = p.body.wheel_radius_m / p.body.gear_ratio;
   int checked = 0;
-  drive(p, 400.0, [&](std::int64_t n, double t, const PsdPlant::State& x, const PsdPlant::Modes& m,
+  drive(setup, 400.0, [&](std::int64_t n, double t, const PsdPlant::State& x, const PsdPlant::Modes& m,
                       const PsdPlant::Outputs& y) {
     // Willis on the reported speeds: (1 + rho) w_c = w_s + rho w_r (the sun speed is derived
     // from it, so this guards the outputs, not the dynamics)
@@ -52,7 +61,7 @@ TEST(Planetary, WillisAndTheTorqueBalanceHoldAtEveryStep) {
     ASSERT_LE(std::abs(flange_sum), 1e-9 * flange_scale + 1e-9) << t;
     if (n % 997 != 0 || m.motion == Motion::kStuck) return;
     // torques the outside applies to the three flanges of the massless gear
-    PsdBus bus;
+    msgs::PsdCommand bus;
     bus.icePowRef_W = y.icePowRef_W;
     bus.genTauRef_Nm = y.genTauRef_Nm;
     bus.motTauRef_Nm = y.motTauRef_Nm;
@@ -75,11 +84,11 @@ TEST(Planetary, WillisAndTheTorqueBalanceHoldAtEveryStep) {
 }
 
 TEST(PsdPlant, EngineOffBurnsNoFuelAndGivesNoTorque) {
-  PsdParams p = psecu("psecu2_nedc.toml");
+  PsdParams p = psecu("psecu2_nedc.toml").plant;
   const PsdPlant plant(p);
   PsdPlant::State x = plant.initial_state();
   x[PsdPlant::kIceSpeed] = 200.0;
-  PsdBus bus;
+  msgs::PsdCommand bus;
   bus.icePowRef_W = 20000.0;
   bus.iceON = false;
   PsdPlant::State dx;
@@ -96,14 +105,15 @@ TEST(MBecu2, HysteresisOnAbove7kWOffBelow5kWWithoutChattering) {
   p.soc_loop_gain_W = 0.0;   // P_add = P_avg
   p.power_filter_s = 1e-9;   // P_avg follows motPowDelB within one period
   PsdEcu ecu(p, 1e-3);
-  PsdBus bus;
+  msgs::PsdSensors in;
+  msgs::PsdCommand bus;
   std::vector<std::pair<double, bool>> switches;
   bool on = false;
   // a triangle 0 -> 10 kW -> 0 with +-800 W of noise: inside the 2 kW band it must not chatter
   for (int k = 0; k < 20000; ++k) {
     const double base = k < 10000 ? k : 20000 - k;
-    bus.motPowDelB_W = base + 800.0 * std::sin(0.7 * k);
-    ecu.update(bus);
+    in.motPowDelB_W = base + 800.0 * std::sin(0.7 * k);
+    ecu.update(in, bus);
     if (bus.iceON != on) {
       switches.emplace_back(base, bus.iceON);
       on = bus.iceON;
@@ -125,25 +135,27 @@ TEST(PsdEcu, FiltersAreExactForHeldInputs) {
   PsdEcuParams p = psecu("psecu2_nedc.toml").ecu;
   const double ts = 0.01;
   PsdEcu ecu(p, ts);
-  PsdBus bus;
-  bus.motPowDelB_W = 1000.0;
-  bus.batSOC = p.soc_ref;
-  for (int k = 0; k < 6000; ++k) ecu.update(bus);  // 60 s = one filter time constant
+  msgs::PsdSensors in;
+  msgs::PsdCommand out;
+  in.motPowDelB_W = 1000.0;
+  in.batSOC = p.soc_ref;
+  for (int k = 0; k < 6000; ++k) ecu.update(in, out);  // 60 s = one filter time constant
   EXPECT_NEAR(ecu.power_average_W(), 1000.0 * (1.0 - std::exp(-1.0)), 1e-9);
-  bus.driverRequest = 0.5;
-  ecu.update(bus);
-  EXPECT_EQ(bus.motTauRef_Nm, 40.0);  // 80 N m per unit request
+  in.driverRequest = 0.5;
+  ecu.update(in, out);
+  EXPECT_EQ(out.motTauRef_Nm, 40.0);  // 80 N m per unit request
 }
 
 TEST(PaperPsecu2OnNedc, FollowsHoldsSocSwitchesTheEngineAndBalancesEnergy) {
-  const PsdParams p = psecu("psecu2_nedc.toml");
+  const Psecu setup = psecu("psecu2_nedc.toml");
+  const PsdParams& p = setup.plant;
   double first_on_s = -1.0, soc_end = 0.0, max_err_urban = 0.0, sq = 0.0, max_err = 0.0, dist = 0.0;
   double creep_m = 0.0;
   bool locked_at_11s = false;
   std::int64_t samples = 0;
   EnergyAudit audit;
   const hil::RunStats st = drive(
-      p, 1400.0,
+      setup, 1400.0,
       [&](std::int64_t, double t, const PsdPlant::State& x, const PsdPlant::Modes&, const PsdPlant::Outputs& y) {
         if (first_on_s < 0.0 && y.iceON != 0.0) first_on_s = t;
         // standing while gen spins the engine up from 50 to 125 rad/s (§4.3)
@@ -195,9 +207,9 @@ TEST(PaperPsecu2OnNedc, FollowsHoldsSocSwitchesTheEngineAndBalancesEnergy) {
 // The example source's set-up (gen and mot at eta = 1, MODELS.md §10.4 table): the
 // re-simulation of §5.4 switches the engine on first at ~337 s.
 TEST(PaperPsecu2OnNedc, TheSourceSetUpStartsTheEngineAt337s) {
-  const PsdParams p = psecu("psecu2_source_nedc.toml");
-  EXPECT_EQ(p.gen.loss_model, DriveLossModel::kIdeal);
-  EXPECT_EQ(p.mot.loss_model, DriveLossModel::kIdeal);
+  const Psecu p = psecu("psecu2_source_nedc.toml");
+  EXPECT_EQ(p.plant.gen.loss_model, DriveLossModel::kIdeal);
+  EXPECT_EQ(p.plant.mot.loss_model, DriveLossModel::kIdeal);
   double first_on_s = -1.0;
   const hil::RunStats st = drive(p, 1400.0, [&](std::int64_t, double t, const auto&, const auto&, const auto& y) {
     if (first_on_s < 0.0 && y.iceON != 0.0) first_on_s = t;
@@ -234,8 +246,8 @@ TEST(TutorialFigures, PowerSplitFuelAt1250sOnNedc) {
 }
 
 TEST(PaperPsecu2OnNedc, OnOffEngineUsesAtLeast20PercentLessFuelThanAlwaysOn) {
-  const PsdParams on_off = psecu("psecu2_nedc.toml");
-  const PsdParams always = psecu("psecu2_nedc.toml", {"vehicle.ecu.kind=MBecu1soc"});
+  const Psecu on_off = psecu("psecu2_nedc.toml");
+  const Psecu always = psecu("psecu2_nedc.toml", {"vehicle.ecu.kind=MBecu1soc"});
   double fuel_on_off = 0.0, fuel_always = 0.0;
   drive(on_off, 1400.0, [&](std::int64_t, double, const auto&, const auto&, const auto& y) { fuel_on_off = y.fuel_g; });
   drive(always, 1400.0, [&](std::int64_t, double, const auto&, const auto&, const auto& y) { fuel_always = y.fuel_g; });

@@ -33,4 +33,15 @@ hil::Scenario load(const std::string& path, const std::vector<std::string>& over
 // MBEV as in vehicles/mbev.toml, loaded through the real loader with the given cycle.
 plant::BevParams mbev(const std::string& cycle_file = "data/cycles/cycle_sort1.csv");
 
+// One step of a plant with its ECU sampled at the step's start, the command acting at once
+// (latency 0), as hil::Runner does with an ECU every step: sense at t_n, update, advance.
+template <class Plant, class Stepper, class Ecu>
+auto step_with_ecu(const Plant& plant, Stepper& stepper, Ecu& ecu, std::int64_t n, typename Plant::State& x,
+                   typename Plant::Modes& m, typename Plant::Inputs& command) {
+  typename Plant::Sensors sensors;
+  plant.sense(stepper.time_s(n), x, m, command, sensors);
+  ecu.update(sensors, command);
+  return stepper.advance(n, x, m, command);
+}
+
 }  // namespace ehpt::test

@@ -21,11 +21,17 @@
 
 #include <string>
 
+#include "msgs/psd.hpp"
 #include "plant/problems.hpp"
-#include "plant/psd_bus.hpp"
 #include "plant/table.hpp"
 
-namespace ehpt::plant {
+// ecu/: the built-in controllers. They are not part of the plant: they read a sensor message
+// and write a command message (msgs/), exactly what an external ECU on a bus does, and use
+// only plant/'s tables and load-time Problems.
+namespace ehpt::ecu {
+
+using plant::Problems;
+using plant::Table1d;
 
 enum class PsdEcuKind { kMBecu1, kMBecu1soc, kMBecu2 };
 const char* ecu_name(PsdEcuKind kind);
@@ -53,8 +59,8 @@ class PsdEcu {
  public:
   PsdEcu(const PsdEcuParams& params, double period_s);
 
-  // Run phase: one ECU period. Reads the sensor half of the bus, writes the command half.
-  void update(PsdBus& bus);
+  // Run phase: one ECU period: the sensors sampled at its start -> the command for it.
+  void update(const msgs::PsdSensors& in, msgs::PsdCommand& out);
 
   double power_average_W() const { return p_avg_W_; }
 
@@ -66,4 +72,4 @@ class PsdEcu {
   bool ice_on_ = false;         // MBecu2: iceON(0) = false
 };
 
-}  // namespace ehpt::plant
+}  // namespace ehpt::ecu

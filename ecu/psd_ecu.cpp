@@ -1,9 +1,11 @@
-#include "plant/psd_ecu.hpp"
+#include "ecu/psd_ecu.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-namespace ehpt::plant {
+namespace ehpt::ecu {
+
+using plant::number_text;
 
 const char* ecu_name(PsdEcuKind kind) {
   switch (kind) {
@@ -15,7 +17,6 @@ const char* ecu_name(PsdEcuKind kind) {
 }
 
 void validate(const PsdEcuParams& p, const std::string& at, Problems& problems) {
-  problems.require_non_negative(at + ".period_s", p.period_s);
   problems.require_positive(at + ".max_torque_request_Nm", p.max_torque_request_Nm);
   problems.require_positive(at + ".power_filter_s", p.power_filter_s);
   problems.require_non_negative(at + ".gen_loop_gain_Nm_s_rad", p.gen_loop_gain_Nm_s_rad);
@@ -42,26 +43,27 @@ PsdEcu::PsdEcu(const PsdEcuParams& params, double period_s)
 }
 
 // Run phase: no allocation.
-void PsdEcu::update(PsdBus& bus) {
+void PsdEcu::update(const msgs::PsdSensors& in, msgs::PsdCommand& out) {
   // mot follows the driver directly
-  bus.motTauRef_Nm = p_.max_torque_request_Nm * bus.driverRequest;
+  out.motTauRef_Nm = p_.max_torque_request_Nm * in.driverRequest;
   // engine power: averaged traction power plus the SOC loop
-  const double p_add_W = p_avg_W_ + p_.soc_loop_gain_W * (p_.soc_ref - bus.batSOC);
+  const double p_add_W = p_avg_W_ + p_.soc_loop_gain_W * (p_.soc_ref - in.batSOC);
   if (p_.kind == PsdEcuKind::kMBecu2) {
     if (!ice_on_ && p_add_W > p_.on_threshold_W) ice_on_ = true;
     if (ice_on_ && p_add_W < p_.off_threshold_W) ice_on_ = false;
   } else {
     ice_on_ = true;
   }
-  bus.iceON = ice_on_;
-  bus.icePowRef_W = ice_on_ ? p_add_W : 0.0;
+  out.iceON = ice_on_;
+  out.icePowRef_W = ice_on_ ? p_add_W : 0.0;
+  out.iceTauRef_Nm = 0.0;  // the built-in ECUs send power (IceConnP)
   // gen holds the engine at the optimal speed for that power
-  const double speed_ref_rad_s = ice_on_ ? std::max(p_.ice_speed_min_rad_s, p_.power_to_speed_rad_s(bus.icePowRef_W))
+  const double speed_ref_rad_s = ice_on_ ? std::max(p_.ice_speed_min_rad_s, p_.power_to_speed_rad_s(out.icePowRef_W))
                                          : p_.ice_off_speed_ref_rad_s;
-  bus.genTauRef_Nm = std::clamp(tau_gf_Nm_, -p_.gen_torque_max_Nm, p_.gen_torque_max_Nm);
+  out.genTauRef_Nm = std::clamp(tau_gf_Nm_, -p_.gen_torque_max_Nm, p_.gen_torque_max_Nm);
   // filters, exact for inputs held over the period
-  p_avg_W_ += a_power_ * (bus.motPowDelB_W - p_avg_W_);
-  tau_gf_Nm_ += a_gen_ * (p_.gen_loop_gain_Nm_s_rad * (speed_ref_rad_s - bus.iceW_rad_s) - tau_gf_Nm_);
+  p_avg_W_ += a_power_ * (in.motPowDelB_W - p_avg_W_);
+  tau_gf_Nm_ += a_gen_ * (p_.gen_loop_gain_Nm_s_rad * (speed_ref_rad_s - in.iceW_rad_s) - tau_gf_Nm_);
 }
 
-}  // namespace ehpt::plant
+}  // namespace ehpt::ecu
