@@ -912,4 +912,27 @@ TEST(CliFaults, EachFaultBitStopsTheRunWithItsOwnText) {
   }
 }
 
+// Charging past soc_max is a fault too, at the first grid point past the closed-form time
+// t = (soc_max - soc_0) Q / (I (1 - k)) of a constant-current charge (MODELS.md §6.1).
+TEST(CliFaults, ChargingAboveSocMaxStopsTheRunWhenTheClosedFormSays) {
+  const fs::path root = fresh("soc_max");
+  const std::string scenario = ehpt::test::source_path("scenarios/battery_cc_discharge.toml");
+  const std::vector<std::string> sets = {"vehicle.battery.soc_initial=0.9", "vehicle.battery.soc_max=0.95",
+                                         "vehicle.profile=[{current_A = -100.0, duration_s = 400.0}]"};
+  std::vector<std::string> args = {"run", scenario, "--out", (root / "run").string()};
+  for (const auto& s : sets) args.insert(args.end(), {"--set", s});
+  const Result r = ehpt_argv(args);
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  const auto sc = ehpt::test::load(scenario, sets);
+  const auto k = ehpt::plant::derive(std::get<ehpt::plant::BatteryRigParams>(sc.plant).battery);
+  const double charge_As = 0.05 * k.c_batt_F * (k.emf_max_V - k.emf_min_V);
+  const double t_full = charge_As / (100.0 * (1.0 - k.k_parasitic));
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.out, m, std::regex("FAULT         SOC left \\[soc_min, soc_max\\] at t = ([0-9.]+) s")))
+      << r.out;
+  const double t_fault = std::stod(m[1].str());
+  EXPECT_GT(t_fault, t_full);
+  EXPECT_LE(t_fault, t_full + 1e-3 + 1e-9);
+}
+
 }  // namespace
