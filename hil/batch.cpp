@@ -121,6 +121,7 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
 
   const RunStats& st = runner.stats();
+  const MetricTotals& mt = runner.metrics();
   const typename Plant::Outputs& y1 = runner.last_outputs();
   const plant::EnergyAudit audit = plant.audit(runner.initial_state(), runner.state());
   const double sim_s = runner.time_s();
@@ -172,11 +173,11 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
   double distance_m = 0.0;
   if constexpr (requires { y1.distance_m; }) distance_m = y1.distance_m;
   j.number("distance_m", distance_m);
-  const double rms_kmh = st.speed_samples > 0 ? std::sqrt(st.speed_error_sq_sum / st.speed_samples) : NAN;
-  if (st.has_speed) {
+  const double rms_kmh = mt.speed_error_rms_kmh();
+  if (mt.has_speed) {
     j.number("speed_error_rms_kmh", rms_kmh);
-    j.number("speed_error_max_kmh", st.speed_error_max_kmh);
-    j.number("locked_time_s", st.locked_time_s);
+    j.number("speed_error_max_kmh", mt.speed_error_max_kmh);
+    j.number("locked_time_s", mt.locked_time_s);
   } else {
     j.null("speed_error_rms_kmh");
     j.null("speed_error_max_kmh");
@@ -203,9 +204,9 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
   }
   j.number("fuel_g", fuel_g);
   j.number("fuel_L_per_100km", fuel_L_per_100km);
-  if (st.has_ice) {
-    j.number("ice_on_time_s", st.ice_on_time_s);
-    j.integer("ice_starts", st.ice_starts);
+  if (mt.has_engine) {
+    j.number("ice_on_time_s", mt.engine_on_time_s);
+    j.integer("ice_starts", mt.engine_starts);
   }
   j.number("energy_balance_residual_J", audit.residual_J);
   j.number("energy_balance_relative", relative);
@@ -225,9 +226,9 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
                 solver_name(sc.solver.kind), sc.solver.step_s, static_cast<long long>(st.steps_done),
                 static_cast<long long>(st.events));
   s += buf;
-  if (st.has_speed) {
+  if (mt.has_speed) {
     std::snprintf(buf, sizeof buf, "distance      %.4f km\nspeed error   rms %.3f km/h, max %.3f km/h\n", distance_m / 1000.0,
-                  rms_kmh, st.speed_error_max_kmh);
+                  rms_kmh, mt.speed_error_max_kmh);
     s += buf;
   }
   if constexpr (requires { y0.soc; }) {
@@ -240,9 +241,9 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
     }
     s += buf;
   }
-  if (st.has_ice) {
+  if (mt.has_engine) {
     std::snprintf(buf, sizeof buf, "fuel          %.1f g, %.2f L/100 km; engine on %.1f s, %lld starts\n", fuel_g,
-                  fuel_L_per_100km, st.ice_on_time_s, static_cast<long long>(st.ice_starts));
+                  fuel_L_per_100km, mt.engine_on_time_s, static_cast<long long>(mt.engine_starts));
     s += buf;
   }
   std::snprintf(buf, sizeof buf, "energy audit  residual %.3g J (relative %.2g)\n", audit.residual_J, relative);

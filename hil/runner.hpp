@@ -1,9 +1,11 @@
 #pragma once
-// The batch loop: plant + solver + event stepper on the fixed grid t0 + n h (STYLE.md §8).
-// Start-up sizes every buffer; run() allocates nothing, does no I/O and takes no lock, so
-// a target can call it in chunks and write the recorded rows between chunks (progress and
-// bounded memory on long runs). The pacer is "as fast as possible"; later pacers wrap the
-// same advance() so every pacer gives the same trajectory.
+// The runner core (STYLE.md §8): per step the controller port (sensors -> ECU -> command,
+// with its period and latency), advance() on the fixed grid t0 + n h, the outputs, and small
+// policies composed around it: Recorder (rows), Metrics (declared by the vehicle),
+// FaultPolicy (stop or hold) and a Pacer (as fast as possible; wall clock, lockstep and real
+// time plug in). Start-up sizes every buffer; run() allocates nothing, does no I/O and takes
+// no lock, so a target can call it in chunks and write the recorded rows between chunks
+// (progress and bounded memory on long runs). Every pacer gives the same trajectory.
 
 #include <algorithm>
 #include <atomic>
@@ -13,6 +15,9 @@
 #include <type_traits>
 #include <vector>
 
+#include "hil/metrics.hpp"
+#include "hil/pacer.hpp"
+#include "hil/recorder.hpp"
 #include "msgs/stamp.hpp"
 #include "plant/signals.hpp"
 #include "solvers/event_stepper.hpp"
@@ -29,18 +34,12 @@ struct RunStats {
   unsigned fault = 0;
   double fault_time_s = 0.0;
   std::int64_t fault_step = 0;
-  // vehicles: speed error v_ref - v over every grid point (km/h)
-  bool has_speed = false;
-  std::int64_t speed_samples = 0;
-  double speed_error_sq_sum = 0.0;
-  double speed_error_max_kmh = 0.0;
-  double locked_time_s = 0.0;
   std::int64_t rows_dropped = 0;  // rows not recorded because the buffer was not drained
-  // engines: time on and number of starts (off -> on)
-  bool has_ice = false;
-  double ice_on_time_s = 0.0;
-  std::int64_t ice_starts = 0;
 };
+
+// What a fault does to the run: stop it (batch runs: exit 3, outputs kept) or hold on (an
+// HIL plant keeps running and reports the fault on the bus; the first one is recorded).
+enum class FaultPolicy { kStop, kHold };
 
 // How many runs in this process have stopped on a fault: a test guard (tests/support) fails
 // any test whose run raised a fault it did not expect. Touched once per faulted run.
@@ -68,7 +67,7 @@ struct SensorsOf<Plant> {
 // discrete-time system. latency_steps = 0 (the default): the command acts from the sample
 // it was computed from, as the library's continuous ECUs do and as a lockstep SIL (the plant
 // waits for the command) can honour exactly.
-template <class Plant, class Integrator, class Controller = NoController>
+template <class Plant, class Integrator, class Controller = NoController, class Pacer = AsFastAsPossible>
 class Runner {
  public:
   using State = typename Plant::State;
@@ -79,25 +78,27 @@ class Runner {
   // columns: indices into plant.signals() to record. chunk_steps: most steps one run() call
   // may take; the row buffer is sized for it here.
   Runner(const Plant& plant, double h_s, std::int64_t total_steps, std::int64_t decimation,
-         std::vector<int> columns, std::int64_t chunk_steps, Controller* controller = nullptr,
-         std::int64_t controller_ratio = 1, std::int64_t latency_steps = 0)
+         const std::vector<int>& columns, std::int64_t chunk_steps, Controller* controller = nullptr,
+         std::int64_t controller_ratio = 1, std::int64_t latency_steps = 0, Pacer* pacer = nullptr,
+         FaultPolicy fault_policy = FaultPolicy::kStop)
       : plant_(plant),
         controller_(controller),
+        pacer_(pacer),
+        fault_policy_(fault_policy),
         controller_ratio_(controller_ratio),
         latency_steps_(latency_steps),
         integrator_(plant),
         stepper_(plant, integrator_, 0.0, h_s),
         total_steps_(total_steps),
-        decimation_(decimation),
         chunk_steps_(chunk_steps),
-        columns_(std::move(columns)) {
-    for (int c : columns_) members_.push_back(plant.signals()[static_cast<std::size_t>(c)].member);
-    rows_.resize(static_cast<std::size_t>((chunk_steps_ / decimation_ + 4) * static_cast<std::int64_t>(columns_.size())));
+        recorder_(plant.signals(), columns, decimation, chunk_steps),
+        metrics_(Plant::kMetrics, h_s) {
     // commands in flight: one per ECU period of latency, and one more
     pending_.resize(static_cast<std::size_t>(latency_steps_ / std::max<std::int64_t>(1, controller_ratio_) + 2));
     x0_ = plant.initial_state();
     x_ = x0_;
     m_ = plant.initial_modes(x_);
+    if (pacer_ != nullptr) pacer_->wait_for_step(0);
     tick_controller(0);
     observe(0);
   }
@@ -107,9 +108,9 @@ class Runner {
   std::int64_t run(const std::atomic<int>* stop = nullptr) {
     const std::int64_t end = std::min(total_steps_, n_ + chunk_steps_);
     const std::int64_t start = n_;
-    while (n_ < end && stats_.fault == 0) {
+    while (n_ < end && !stopped_by_fault()) {
       if (stop != nullptr && stop->load(std::memory_order_relaxed) != 0) {
-        record_row_once();  // an interrupted run still ends with the state it reached
+        recorder_.record(n_, y_);  // an interrupted run still ends with the state it reached
         break;
       }
       const solvers::StepReport r = stepper_.advance(n_, x_, m_, inputs_);
@@ -118,28 +119,33 @@ class Runner {
       stats_.newton_failures += r.converged ? 0 : 1;
       stats_.newton_iterations += r.iterations;
       ++n_;
+      if (pacer_ != nullptr) pacer_->wait_for_step(n_);
       tick_controller(n_);
       observe(n_);
     }
     stats_.steps_done = n_;
+    stats_.rows_dropped = recorder_.dropped();
     return n_ - start;
   }
 
-  bool finished() const { return n_ >= total_steps_ || stats_.fault != 0; }
+  bool finished() const { return n_ >= total_steps_ || stopped_by_fault(); }
   std::int64_t step_index() const { return n_; }
   std::int64_t total_steps() const { return total_steps_; }
   double time_s() const { return stepper_.time_s(n_); }
   const RunStats& stats() const { return stats_; }
+  const MetricTotals& metrics() const { return metrics_.totals(); }
   const State& state() const { return x_; }
   const State& initial_state() const { return x0_; }
   const Modes& modes() const { return m_; }
   const Outputs& last_outputs() const { return y_; }
 
   // Recorded rows since the last take (row-major, columns as given); clears the buffer.
-  std::span<const double> rows() const { return {rows_.data(), row_count_ * columns_.size()}; }
-  void clear_rows() { row_count_ = 0; }
+  std::span<const double> rows() const { return recorder_.rows(); }
+  void clear_rows() { recorder_.clear(); }
 
  private:
+  bool stopped_by_fault() const { return fault_policy_ == FaultPolicy::kStop && stats_.fault != 0; }
+
   // Run phase: commands that are due apply; at a sample step the ECU reads the sensors at
   // t_n and computes its next command (applied now, or latency_steps later).
   void tick_controller(std::int64_t n) {
@@ -166,30 +172,11 @@ class Runner {
     }
   }
 
-  // Run phase: outputs at grid point n, metrics, and the decimated record.
+  // Run phase: outputs at grid point n, metrics, the fault policy and the record.
   void observe(std::int64_t n) {
     const double t_s = stepper_.time_s(n);
     plant_.outputs(t_s, x_, m_, inputs_, y_);
-    if constexpr (requires { y_.speed_ref_m_s; y_.speed_m_s; }) {
-      const double err_kmh = 3.6 * (y_.speed_ref_m_s - y_.speed_m_s);
-      stats_.has_speed = true;
-      ++stats_.speed_samples;
-      stats_.speed_error_sq_sum += err_kmh * err_kmh;
-      stats_.speed_error_max_kmh = std::max(stats_.speed_error_max_kmh, std::abs(err_kmh));
-    }
-    if constexpr (requires { y_.locked; }) {
-      if (n > 0 && y_.locked != 0.0) ++locked_steps_;
-      stats_.locked_time_s = static_cast<double>(locked_steps_) * stepper_.step_s();
-    }
-    if constexpr (requires { y_.iceON; }) {
-      const bool on = y_.iceON != 0.0;
-      stats_.has_ice = true;
-      if (n > 0 && ice_was_on_) ++ice_on_steps_;  // on during the step before
-      stats_.ice_on_time_s = static_cast<double>(ice_on_steps_) * stepper_.step_s();
-      if (on && !ice_was_on_ && n > 0) ++stats_.ice_starts;
-      if (n == 0 && on) stats_.ice_starts = 1;  // running from the start counts as one start
-      ice_was_on_ = on;
-    }
+    metrics_.observe(n, y_);
     const auto fault = static_cast<unsigned>(y_.fault);
     if (fault != 0 && stats_.fault == 0) {
       stats_.fault = fault;
@@ -197,23 +184,13 @@ class Runner {
       stats_.fault_step = n;
       g_runs_with_fault.fetch_add(1, std::memory_order_relaxed);
     }
-    if (n % decimation_ == 0 || n == total_steps_ || fault != 0) record_row_once();
-  }
-
-  void record_row_once() {
-    if (last_recorded_ == n_) return;
-    if ((row_count_ + 1) * columns_.size() > rows_.size()) {  // the caller did not drain: count, never overrun
-      ++stats_.rows_dropped;
-      return;
-    }
-    double* row = rows_.data() + row_count_ * columns_.size();
-    for (std::size_t c = 0; c < members_.size(); ++c) row[c] = y_.*members_[c];
-    ++row_count_;
-    last_recorded_ = n_;
+    if (recorder_.due(n) || n == total_steps_ || (fault != 0 && stats_.fault_step == n)) recorder_.record(n, y_);
   }
 
   const Plant& plant_;
   Controller* controller_;
+  Pacer* pacer_;
+  FaultPolicy fault_policy_;
   std::int64_t controller_ratio_, latency_steps_;
   struct Pending {
     std::int64_t apply_step = 0;
@@ -222,17 +199,12 @@ class Runner {
   std::vector<Pending> pending_;  // ring of commands not applied yet
   std::size_t pending_head_ = 0, pending_count_ = 0;
   std::uint32_t sensor_sequence_ = 0, command_sequence_ = 0;
-  bool ice_was_on_ = false;
-  std::int64_t ice_on_steps_ = 0, locked_steps_ = 0;  // counted, not summed: exact times
   Integrator integrator_;
   solvers::EventStepper<Plant, Integrator> stepper_;
-  std::int64_t total_steps_, decimation_, chunk_steps_;
-  std::vector<int> columns_;
-  std::vector<double Outputs::*> members_;
-  std::vector<double> rows_;
-  std::size_t row_count_ = 0;
+  std::int64_t total_steps_, chunk_steps_;
+  Recorder<Outputs> recorder_;
+  Metrics<Outputs> metrics_;
   std::int64_t n_ = 0;
-  std::int64_t last_recorded_ = -1;  // step of the last recorded row
   State x0_, x_;
   Modes m_{};
   Inputs inputs_{};

@@ -103,6 +103,9 @@ class BevPlant {
     double battery_out_J = 0, road_work_J = 0, drive_loss_J = 0, battery_loss_J = 0, brake_work_J = 0;
   };
   static const std::array<Signal<Outputs>, 31> kSignals;
+  static constexpr MetricSources<Outputs> kMetrics{.speed_ref_m_s = &Outputs::speed_ref_m_s,
+                                                   .speed_m_s = &Outputs::speed_m_s,
+                                                   .locked = &Outputs::locked};
 
   explicit BevPlant(const BevParams& params);  // start-up: params already validated
 

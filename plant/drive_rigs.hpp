@@ -60,6 +60,8 @@ class DriveRig {
     double power_dc_W = 0, dc_current_A = 0, efficiency = 0, load_torque_Nm = 0, fault = 0;
   };
 
+  static constexpr MetricSources<Outputs> kMetrics{};  // no vehicle: no speed, no engine
+
   explicit DriveRig(const DriveRigParams& params)
       : p_(params), drive_(params.drive), inv_inertia_(1.0 / total_inertia_kgm2()) {}
   std::span<const Signal<Outputs>> signals() const;

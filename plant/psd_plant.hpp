@@ -91,6 +91,10 @@ class PsdPlant {
     double locked = 0, fault = 0;
   };
   static const std::array<Signal<Outputs>, 35> kSignals;
+  static constexpr MetricSources<Outputs> kMetrics{.speed_ref_m_s = &Outputs::speed_ref_m_s,
+                                                   .speed_m_s = &Outputs::speed_m_s,
+                                                   .locked = &Outputs::locked,
+                                                   .engine_on = &Outputs::iceON};
   std::span<const Signal<Outputs>> signals() const { return kSignals; }
 
   explicit PsdPlant(const PsdParams& params);  // start-up: params already validated

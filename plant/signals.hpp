@@ -17,6 +17,17 @@ struct Signal {
   std::string_view meaning;   // one line for the README and `ehpt run --help`
 };
 
+// The outputs a vehicle's run metrics are computed from (hil/metrics.hpp), declared by each
+// plant (static constexpr kMetrics), never inferred from the names of its output fields. A
+// null member: the vehicle has no such quantity (a rig has no speed, an EV no engine).
+template <class Outputs>
+struct MetricSources {
+  double Outputs::*speed_ref_m_s = nullptr;  // the cycle's speed: speed error against it
+  double Outputs::*speed_m_s = nullptr;
+  double Outputs::*locked = nullptr;         // 1 while held at standstill: locked time
+  double Outputs::*engine_on = nullptr;      // 1 while the engine runs: on-time, starts
+};
+
 // Run-time faults (§6.4 asserts and numerical health). Plants report them in Outputs.
 enum Fault : unsigned {
   kFaultNone = 0,

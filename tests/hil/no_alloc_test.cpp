@@ -42,7 +42,7 @@ TEST(NoAllocation, PowerSplitHybridWithItsEcu) {
   runner.run();  // run phase: 400 s, through engine starts at 145.5 s and 334.7 s and their stops
   EXPECT_EQ(test::allocation_count() - before, 0u);
   EXPECT_EQ(runner.step_index(), 400000);
-  EXPECT_EQ(runner.stats().ice_starts, 2);
+  EXPECT_EQ(runner.metrics().engine_starts, 2);
   EXPECT_EQ(runner.last_outputs().iceON, 0.0);
 }
 

@@ -1,0 +1,75 @@
+#pragma once
+// Pacers: when the runner may take the next step. Every pacer gives the same trajectory; they
+// differ only in waiting. The timing logic is a pure function (tick_after) so that it is
+// tested against a fake clock (ros2_control's style); the waiting is the pacer's.
+//   AsFastAsPossible: never waits (batch runs).
+//   WallClock<Clock>: step n is due at start + n period; waits until then. Overrun policy:
+//   when a step ends after later ticks have passed, those ticks are skipped and counted,
+//   never caught up in a burst. (A lockstep pacer, waiting for the ECU's command, and the
+//   real-time SCHED_FIFO pacer plug in the same way.)
+
+#include <chrono>
+#include <cstdint>
+#include <thread>
+
+namespace ehpt::hil {
+
+struct AsFastAsPossible {
+  // Run phase: step n may start now.
+  void wait_for_step(std::int64_t) {}
+};
+
+// When the tick that follows `now` is, and how many ticks were missed on the way.
+struct NextTick {
+  std::int64_t tick = 0;    // index of the next tick to wait for
+  std::int64_t missed = 0;  // ticks that passed while the last step ran (skipped)
+};
+
+// Pure: the tick to wait for after tick `done` finished at `now_ns`, on a grid start_ns +
+// k period_ns. A finished step whose next tick is already past skips to the first tick after
+// now (the missed ones are counted), so late steps never run back to back.
+inline NextTick tick_after(std::int64_t done, std::int64_t now_ns, std::int64_t start_ns, std::int64_t period_ns) {
+  const std::int64_t next = done + 1;
+  if (now_ns <= start_ns + next * period_ns) return {next, 0};
+  const std::int64_t first_future = (now_ns - start_ns) / period_ns + 1;
+  return {first_future, first_future - next};
+}
+
+// Clock: now_ns() and sleep_until_ns(t) (the real one below; a fake one in the tests).
+template <class Clock>
+class WallClock {
+ public:
+  WallClock(Clock& clock, std::int64_t period_ns) : clock_(clock), period_ns_(period_ns) {}
+
+  // Run phase: waits until step n is due. Step numbers are ticks until one is missed; after
+  // that the grid stays the same and skipped ticks are counted.
+  void wait_for_step(std::int64_t n) {
+    if (n == 0) {
+      start_ns_ = clock_.now_ns();
+      tick_ = 0;
+      return;
+    }
+    const NextTick next = tick_after(tick_, clock_.now_ns(), start_ns_, period_ns_);
+    missed_ += next.missed;
+    tick_ = next.tick;
+    clock_.sleep_until_ns(start_ns_ + tick_ * period_ns_);
+  }
+  std::int64_t missed_ticks() const { return missed_; }
+
+ private:
+  Clock& clock_;
+  std::int64_t period_ns_;
+  std::int64_t start_ns_ = 0, tick_ = 0, missed_ = 0;
+};
+
+struct SteadyClock {
+  std::int64_t now_ns() const {
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+        .count();
+  }
+  void sleep_until_ns(std::int64_t t_ns) const {
+    std::this_thread::sleep_until(std::chrono::steady_clock::time_point(std::chrono::nanoseconds(t_ns)));
+  }
+};
+
+}  // namespace ehpt::hil

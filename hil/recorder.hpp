@@ -1,0 +1,56 @@
+#pragma once
+// The rows a run records: chosen columns of the outputs at every decimation-th grid point,
+// plus row 0, the last step and a fault step, into a buffer sized at start-up for one chunk
+// of steps. The caller drains it between chunks (rows(), clear()); a row that does not fit
+// is counted as dropped, never written past the buffer.
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "plant/signals.hpp"
+
+namespace ehpt::hil {
+
+template <class Outputs>
+class Recorder {
+ public:
+  // Start-up: signals is the plant's list, columns the indices to record.
+  Recorder(std::span<const plant::Signal<Outputs>> signals, const std::vector<int>& columns,
+           std::int64_t decimation, std::int64_t chunk_steps)
+      : decimation_(decimation) {
+    for (int c : columns) members_.push_back(signals[static_cast<std::size_t>(c)].member);
+    rows_.resize(static_cast<std::size_t>((chunk_steps / decimation_ + 4) * static_cast<std::int64_t>(members_.size())));
+  }
+
+  // Run phase: whether grid point n is one that is written without being forced.
+  bool due(std::int64_t n) const { return n % decimation_ == 0; }
+
+  // Run phase: records y as the row of step n (once per n).
+  void record(std::int64_t n, const Outputs& y) {
+    if (last_recorded_ == n) return;
+    if ((row_count_ + 1) * members_.size() > rows_.size()) {
+      ++dropped_;
+      return;
+    }
+    double* row = rows_.data() + row_count_ * members_.size();
+    for (std::size_t c = 0; c < members_.size(); ++c) row[c] = y.*members_[c];
+    ++row_count_;
+    last_recorded_ = n;
+  }
+
+  // Rows since the last clear (row-major, columns as given).
+  std::span<const double> rows() const { return {rows_.data(), row_count_ * members_.size()}; }
+  void clear() { row_count_ = 0; }
+  std::int64_t dropped() const { return dropped_; }
+
+ private:
+  std::int64_t decimation_;
+  std::vector<double Outputs::*> members_;
+  std::vector<double> rows_;
+  std::size_t row_count_ = 0;
+  std::int64_t last_recorded_ = -1;
+  std::int64_t dropped_ = 0;
+};
+
+}  // namespace ehpt::hil
