@@ -68,6 +68,7 @@ struct SensorsOf<Plant> {
 // it was computed from, as the library's continuous ECUs do and as a lockstep SIL (the plant
 // waits for the command) can honour exactly.
 template <class Plant, class Integrator, class Controller = NoController, class Pacer = AsFastAsPossible>
+  requires solvers::RunnablePlant<Plant> && (std::is_same_v<Controller, NoController> || solvers::PlantWithSensors<Plant>)
 class Runner {
  public:
   using State = typename Plant::State;

@@ -29,6 +29,7 @@
 #include <cstdint>
 
 #include "solvers/integrators.hpp"
+#include "solvers/plant.hpp"
 
 namespace ehpt::solvers {
 
@@ -41,6 +42,7 @@ struct StepReport {
 };
 
 template <class Plant, class Integrator>
+  requires ::ehpt::solvers::Plant<Plant>
 class EventStepper {
  public:
   using State = typename Plant::State;

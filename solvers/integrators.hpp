@@ -1,8 +1,5 @@
 #pragma once
-// Fixed-step integrators over a plant (STYLE.md §6). A plant provides:
-//   static constexpr int kNumStates, kNumCrossings;
-//   using State = Eigen::Matrix<double, kNumStates, 1>;  struct Modes;  struct Inputs;
-//   void derivatives(double t_s, const State& x, const Modes&, const Inputs&, State& dx) const;
+// Fixed-step integrators over a plant (STYLE.md §6; the contract: solvers/plant.hpp).
 // Modes and inputs are held constant over a step. Both integrators own their scratch, so a
 // step allocates nothing, and neither throws: failures come back in IntegratorStatus.
 
@@ -11,6 +8,8 @@
 
 #include <Eigen/Core>
 #include <Eigen/LU>
+
+#include "solvers/plant.hpp"
 
 namespace ehpt::solvers {
 
@@ -21,6 +20,7 @@ struct IntegratorStatus {
 
 // Classical fourth-order Runge-Kutta.
 template <class Plant>
+  requires ::ehpt::solvers::OdeSystem<Plant>
 class Rk4 {
  public:
   using State = typename Plant::State;
@@ -54,6 +54,7 @@ class Rk4 {
 // The Jacobian dg/dx = I - h df/dx is built by forward differences once per step and
 // factorised with PartialPivLU (fixed size, no heap); the iteration is capped.
 template <class Plant>
+  requires ::ehpt::solvers::OdeSystem<Plant>
 class ImplicitEuler {
  public:
   using State = typename Plant::State;
