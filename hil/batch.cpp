@@ -6,14 +6,9 @@
 #include <cstdio>
 #include <ostream>
 
-#include "hil/runner.hpp"
+#include "hil/simulation.hpp"
 #include "io/number_format.hpp"
 #include "io/text_file.hpp"
-#include "plant/battery_rig.hpp"
-#include "plant/bev_plant.hpp"
-#include "plant/drive_rigs.hpp"
-#include "plant/psd_plant.hpp"
-#include "solvers/integrators.hpp"
 
 namespace ehpt::hil {
 
@@ -42,11 +37,11 @@ std::string signal_name(int sig) {
   }
 }
 
-template <class Plant, class Integrator, class Controller = NoController>
-BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions& opt, std::ostream& log,
-                      Controller* controller = nullptr) {
+}  // namespace
+
+BatchResult run_batch(const Scenario& sc, const BatchOptions& opt, std::ostream& log) {
   BatchResult res;
-  const auto signals = plant.signals();
+  const std::vector<SignalInfo> signals = scenario_signals(sc);
   std::vector<int> columns;
   if (sc.output.signals.empty()) {
     for (std::size_t i = 0; i < signals.size(); ++i) columns.push_back(static_cast<int>(i));
@@ -84,10 +79,8 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
   }
   text += "\n";
 
-  Runner<Plant, Integrator, Controller> runner(plant, sc.solver.step_s, sc.solver.steps, sc.output.decimation,
-                                               columns, kChunkSteps, controller, sc.solver.ecu_ratio,
-                                               sc.solver.ecu_latency_steps);
-  typename Plant::Outputs y0 = runner.last_outputs();
+  const std::unique_ptr<Simulation> sim = make_simulation(sc, SimulationOptions{columns, kChunkSteps});
+  Simulation& runner = *sim;
   const auto wall_start = std::chrono::steady_clock::now();
   double run_wall_s = 0.0;
   int interrupted_by = 0;  // signal number
@@ -122,8 +115,8 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
 
   const RunStats& st = runner.stats();
   const MetricTotals& mt = runner.metrics();
-  const typename Plant::Outputs& y1 = runner.last_outputs();
-  const plant::EnergyAudit audit = plant.audit(runner.initial_state(), runner.state());
+  const RunFigures fig = runner.figures();
+  const plant::EnergyAudit audit = runner.audit();
   const double sim_s = runner.time_s();
 
   io::JsonObject& j = res.summary;
@@ -170,8 +163,7 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
   j.integer("output_decimation", sc.output.decimation);
   j.integer("rows_dropped", st.rows_dropped);
 
-  double distance_m = 0.0;
-  if constexpr (requires { y1.distance_m; }) distance_m = y1.distance_m;
+  const double distance_m = fig.distance_m.value_or(0.0);
   j.number("distance_m", distance_m);
   const double rms_kmh = mt.speed_error_rms_kmh();
   if (mt.has_speed) {
@@ -189,17 +181,17 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
   j.number("battery_emf_Wh_per_km", distance_m > 0.0 ? (audit.battery_out_J + audit.battery_loss_J) / 3600.0 /
                                                           (distance_m / 1000.0)
                                                     : NAN);
-  if constexpr (requires { y0.soc; }) {
-    j.number("soc_start", y0.soc);
-    j.number("soc_end", y1.soc);
+  if (fig.soc_start) {
+    j.number("soc_start", *fig.soc_start);
+    j.number("soc_end", *fig.soc_end);
   } else {
     j.null("soc_start");
     j.null("soc_end");
   }
   double fuel_g = 0.0, fuel_L_per_100km = 0.0;
-  if constexpr (requires { y1.fuel_g; }) {
-    fuel_g = y1.fuel_g - y0.fuel_g;
-    const double litres = fuel_g / 1000.0 / plant.params().ice.fuel_density_kg_m3 * 1000.0;
+  if (fig.fuel_g) {
+    fuel_g = *fig.fuel_g;
+    const double litres = fuel_g / 1000.0 / fig.fuel_density_kg_m3 * 1000.0;
     fuel_L_per_100km = distance_m > 0.0 ? litres / (distance_m / 1e5) : NAN;
   }
   j.number("fuel_g", fuel_g);
@@ -231,13 +223,14 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
                   rms_kmh, mt.speed_error_max_kmh);
     s += buf;
   }
-  if constexpr (requires { y0.soc; }) {
+  if (fig.soc_start) {
     if (distance_m > 0.0) {
       std::snprintf(buf, sizeof buf, "battery       %.1f Wh out, %.1f Wh/km, SOC %.4f -> %.4f\n",
-                    audit.battery_out_J / 3600.0, audit.battery_out_J / 3600.0 / (distance_m / 1000.0), y0.soc, y1.soc);
+                    audit.battery_out_J / 3600.0, audit.battery_out_J / 3600.0 / (distance_m / 1000.0), *fig.soc_start,
+                    *fig.soc_end);
     } else {  // a rig: no distance
       std::snprintf(buf, sizeof buf, "battery       %.1f Wh out, SOC %.4f -> %.4f\n", audit.battery_out_J / 3600.0,
-                    y0.soc, y1.soc);
+                    *fig.soc_start, *fig.soc_end);
     }
     s += buf;
   }
@@ -282,37 +275,6 @@ BatchResult run_plant(const Scenario& sc, const Plant& plant, const BatchOptions
   res.results_dir = dir.results_dir();
   for (const std::string& w : dir.warnings()) res.warnings.push_back(w);
   return res;
-}
-
-template <class Plant, class Controller = NoController>
-BatchResult run_with_solver(const Scenario& sc, const Plant& plant, const BatchOptions& opt, std::ostream& log,
-                            Controller* controller = nullptr) {
-  if (sc.solver.kind == SolverKind::kRk4) {
-    return run_plant<Plant, solvers::Rk4<Plant>, Controller>(sc, plant, opt, log, controller);
-  }
-  return run_plant<Plant, solvers::ImplicitEuler<Plant>, Controller>(sc, plant, opt, log, controller);
-}
-
-}  // namespace
-
-BatchResult run_batch(const Scenario& sc, const BatchOptions& opt, std::ostream& log) {
-  if (const auto* p = std::get_if<plant::BevParams>(&sc.plant)) {
-    const plant::BevPlant plant(*p);
-    ecu::EvFollower follower;
-    return run_with_solver(sc, plant, opt, log, &follower);
-  }
-  if (const auto* p = std::get_if<plant::PsdParams>(&sc.plant)) {
-    const plant::PsdPlant plant(*p);
-    const auto& params = std::get<ecu::PsdEcuParams>(sc.ecu);
-    ecu::PsdEcu controller(params, params.period_s);
-    return run_with_solver(sc, plant, opt, log, &controller);
-  }
-  if (const auto* p = std::get_if<plant::BatteryRigParams>(&sc.plant)) {
-    const plant::BatteryRig plant(*p);
-    return run_with_solver(sc, plant, opt, log);
-  }
-  const plant::DriveRig plant(std::get<plant::DriveRigParams>(sc.plant));
-  return run_with_solver(sc, plant, opt, log);
 }
 
 }  // namespace ehpt::hil

@@ -61,7 +61,7 @@ class BatteryRig {
     double fault = 0;
   };
   static const std::array<Signal<Outputs>, 14> kSignals;
-  static constexpr MetricSources<Outputs> kMetrics{};  // no vehicle: no speed, no engine
+  static constexpr MetricSources<Outputs> kMetrics{.soc = &Outputs::soc};  // no vehicle: no speed, no engine
 
   explicit BatteryRig(const BatteryRigParams& params);  // start-up: params already validated
   std::span<const Signal<Outputs>> signals() const { return kSignals; }

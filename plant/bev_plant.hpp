@@ -105,7 +105,9 @@ class BevPlant {
   static const std::array<Signal<Outputs>, 31> kSignals;
   static constexpr MetricSources<Outputs> kMetrics{.speed_ref_m_s = &Outputs::speed_ref_m_s,
                                                    .speed_m_s = &Outputs::speed_m_s,
-                                                   .locked = &Outputs::locked};
+                                                   .locked = &Outputs::locked,
+                                                   .distance_m = &Outputs::distance_m,
+                                                   .soc = &Outputs::soc};
 
   explicit BevPlant(const BevParams& params);  // start-up: params already validated
 

@@ -94,7 +94,10 @@ class PsdPlant {
   static constexpr MetricSources<Outputs> kMetrics{.speed_ref_m_s = &Outputs::speed_ref_m_s,
                                                    .speed_m_s = &Outputs::speed_m_s,
                                                    .locked = &Outputs::locked,
-                                                   .engine_on = &Outputs::iceON};
+                                                   .engine_on = &Outputs::iceON,
+                                                   .distance_m = &Outputs::distance_m,
+                                                   .soc = &Outputs::soc,
+                                                   .fuel_g = &Outputs::fuel_g};
   std::span<const Signal<Outputs>> signals() const { return kSignals; }
 
   explicit PsdPlant(const PsdParams& params);  // start-up: params already validated

@@ -26,6 +26,9 @@ struct MetricSources {
   double Outputs::*speed_m_s = nullptr;
   double Outputs::*locked = nullptr;         // 1 while held at standstill: locked time
   double Outputs::*engine_on = nullptr;      // 1 while the engine runs: on-time, starts
+  double Outputs::*distance_m = nullptr;     // travelled: Wh/km, L/100 km
+  double Outputs::*soc = nullptr;            // battery state of charge: start and end
+  double Outputs::*fuel_g = nullptr;         // fuel used so far
 };
 
 // Run-time faults (§6.4 asserts and numerical health). Plants report them in Outputs.

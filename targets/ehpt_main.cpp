@@ -29,6 +29,7 @@
 #include "hil/batch.hpp"
 #include "hil/config.hpp"
 #include "hil/scenario.hpp"
+#include "hil/simulation.hpp"
 #include "io/output_dir.hpp"
 #include "io/process.hpp"
 
@@ -310,8 +311,7 @@ int cmd_list(const std::vector<std::string>& args) {
   return out(text) ? 0 : 1;
 }
 
-template <class Signals>
-std::string signal_lines(const Signals& signals) {
+std::string signal_lines(const std::vector<ehpt::hil::SignalInfo>& signals) {
   std::string text;
   for (const auto& s : signals) {
     text += std::string(s.name) + std::string(s.name.size() < 24 ? 24 - s.name.size() : 1, ' ') +
@@ -330,17 +330,7 @@ int cmd_signals(const std::vector<std::string>& args) {
   }
   ehpt::hil::Scenario sc;
   if (const int rc = load(args[0], {}, sc); rc != 0) return rc;
-  std::string text;
-  if (const auto* p = std::get_if<ehpt::plant::BevParams>(&sc.plant)) {
-    text = signal_lines(ehpt::plant::BevPlant(*p).signals());
-  } else if (const auto* q = std::get_if<ehpt::plant::PsdParams>(&sc.plant)) {
-    text = signal_lines(ehpt::plant::PsdPlant(*q).signals());
-  } else if (const auto* b = std::get_if<ehpt::plant::BatteryRigParams>(&sc.plant)) {
-    text = signal_lines(ehpt::plant::BatteryRig(*b).signals());
-  } else {
-    text = signal_lines(ehpt::plant::DriveRig(std::get<ehpt::plant::DriveRigParams>(sc.plant)).signals());
-  }
-  return out(text) ? 0 : 1;
+  return out(signal_lines(ehpt::hil::scenario_signals(sc))) ? 0 : 1;
 }
 
 int cmd_plot(const std::vector<std::string>& args) {

@@ -1,0 +1,67 @@
+#pragma once
+// Simulation: one loaded scenario, ready to step, behind one type-erased interface (the CLI,
+// the batch runner and later the Python module use it; none of them knows the vehicle's C++
+// type). Each vehicle kind registers once (hil/vehicles.cpp): its factory and its signals;
+// a new kind touches that table and nothing else that runs.
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "hil/config.hpp"
+#include "hil/metrics.hpp"
+#include "hil/runner.hpp"
+#include "plant/signals.hpp"
+
+namespace ehpt::hil {
+
+struct SignalInfo {
+  std::string_view name;     // column header, SI unit as suffix
+  std::string_view meaning;  // one line
+};
+
+struct SimulationOptions {
+  std::vector<int> columns;              // indices into signals() to record; empty: all
+  std::int64_t chunk_steps = 50000;      // most steps one run() takes; sizes the row buffer
+  FaultPolicy fault_policy = FaultPolicy::kStop;
+};
+
+// The figures of a run that exist only for some vehicles (nullopt where there is none).
+struct RunFigures {
+  std::optional<double> distance_m;
+  std::optional<double> soc_start, soc_end;
+  std::optional<double> fuel_g;               // used during the run
+  double fuel_density_kg_m3 = 0.0;            // with fuel_g: for L/100 km
+};
+
+class Simulation {
+ public:
+  virtual ~Simulation() = default;
+
+  virtual std::span<const SignalInfo> signals() const = 0;
+  // Run phase: up to chunk_steps steps (no allocation, no I/O); stop: non-zero ends the run.
+  virtual std::int64_t run(const std::atomic<int>* stop = nullptr) = 0;
+  virtual bool finished() const = 0;
+  virtual std::int64_t step_index() const = 0;
+  virtual std::int64_t total_steps() const = 0;
+  virtual double time_s() const = 0;
+  // Recorded rows since the last clear (row-major, the chosen columns).
+  virtual std::span<const double> rows() const = 0;
+  virtual void clear_rows() = 0;
+
+  virtual const RunStats& stats() const = 0;
+  virtual const MetricTotals& metrics() const = 0;
+  virtual plant::EnergyAudit audit() const = 0;  // end of run; allocates
+  virtual RunFigures figures() const = 0;
+};
+
+// The simulation of a loaded scenario, built by its vehicle kind's factory.
+std::unique_ptr<Simulation> make_simulation(const Scenario& sc, const SimulationOptions& options);
+// The output signals of the scenario's vehicle (ehpt signals, column choice).
+std::vector<SignalInfo> scenario_signals(const Scenario& sc);
+
+}  // namespace ehpt::hil

@@ -1,0 +1,70 @@
+#pragma once
+// The one implementation of Simulation, over a plant type, its integrator and its built-in
+// ECU (hil/vehicles.cpp instantiates it once per vehicle kind and solver). Start-up only
+// here; the stepping is Runner's.
+
+#include <memory>
+#include <vector>
+
+#include "hil/simulation.hpp"
+
+namespace ehpt::hil {
+
+template <class Plant, class Integrator, class Controller = NoController>
+class SimulationOf final : public Simulation {
+ public:
+  // plant and controller are owned here; the runner refers to them.
+  SimulationOf(const Scenario& sc, const SimulationOptions& opt, std::unique_ptr<const Plant> plant,
+               std::unique_ptr<Controller> controller, double fuel_density_kg_m3 = 0.0)
+      : plant_(std::move(plant)),
+        controller_(std::move(controller)),
+        fuel_density_kg_m3_(fuel_density_kg_m3) {
+    for (const auto& s : plant_->signals()) signals_.push_back({s.name, s.meaning});
+    std::vector<int> columns = opt.columns;
+    if (columns.empty()) {
+      for (std::size_t i = 0; i < signals_.size(); ++i) columns.push_back(static_cast<int>(i));
+    }
+    runner_ = std::make_unique<R>(*plant_, sc.solver.step_s, sc.solver.steps, sc.output.decimation, columns,
+                                  opt.chunk_steps, controller_.get(), sc.solver.ecu_ratio,
+                                  sc.solver.ecu_latency_steps, nullptr, opt.fault_policy);
+    y0_ = runner_->last_outputs();
+  }
+
+  std::span<const SignalInfo> signals() const override { return signals_; }
+  std::int64_t run(const std::atomic<int>* stop) override { return runner_->run(stop); }
+  bool finished() const override { return runner_->finished(); }
+  std::int64_t step_index() const override { return runner_->step_index(); }
+  std::int64_t total_steps() const override { return runner_->total_steps(); }
+  double time_s() const override { return runner_->time_s(); }
+  std::span<const double> rows() const override { return runner_->rows(); }
+  void clear_rows() override { runner_->clear_rows(); }
+  const RunStats& stats() const override { return runner_->stats(); }
+  const MetricTotals& metrics() const override { return runner_->metrics(); }
+  plant::EnergyAudit audit() const override { return plant_->audit(runner_->initial_state(), runner_->state()); }
+
+  RunFigures figures() const override {
+    // from the outputs the vehicle declares (Plant::kMetrics), at t = 0 and now
+    const auto& src = Plant::kMetrics;
+    const auto& y1 = runner_->last_outputs();
+    RunFigures f;
+    if (src.distance_m != nullptr) f.distance_m = y1.*src.distance_m;
+    if (src.soc != nullptr) {
+      f.soc_start = y0_.*src.soc;
+      f.soc_end = y1.*src.soc;
+    }
+    if (src.fuel_g != nullptr) f.fuel_g = y1.*src.fuel_g - y0_.*src.fuel_g;
+    f.fuel_density_kg_m3 = fuel_density_kg_m3_;
+    return f;
+  }
+
+ private:
+  using R = Runner<Plant, Integrator, Controller>;
+  std::unique_ptr<const Plant> plant_;
+  std::unique_ptr<Controller> controller_;
+  double fuel_density_kg_m3_;
+  std::vector<SignalInfo> signals_;
+  std::unique_ptr<R> runner_;
+  typename Plant::Outputs y0_{};
+};
+
+}  // namespace ehpt::hil
