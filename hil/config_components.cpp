@@ -1,0 +1,161 @@
+#include "hil/config_components.hpp"
+
+#include <array>
+#include <string_view>
+
+namespace ehpt::hil::detail {
+
+plant::MapDriveParams read_drive(Reader r, Context& ctx) {
+  plant::MapDriveParams p;
+  p.torque_max_Nm = r.required_number("torque_max_Nm");
+  p.power_max_W = r.required_number("power_max_W");
+  p.speed_max_rad_s = r.required_number("speed_max_rad_s");
+  p.inertia_kgm2 = r.required_number("inertia_kgm2");
+  p.limit_ramp_fraction = r.number("limit_ramp_fraction", p.limit_ramp_fraction);
+  const std::string model = r.text("loss_model", "ideal");
+  if (model == "ideal") {
+    p.loss_model = plant::DriveLossModel::kIdeal;
+  } else if (model == "map") {
+    p.loss_model = plant::DriveLossModel::kMap;
+    const FileRef map = r.path("efficiency_map", true);
+    if (!map.empty()) p.efficiency_map = load_map(map, r.field("efficiency_map"), ctx);
+  } else if (model == "formula") {
+    p.loss_model = plant::DriveLossModel::kFormula;
+    Reader f = r.sub("loss_formula");
+    p.loss_formula.a = f.number("a", p.loss_formula.a);
+    p.loss_formula.b_t = f.number("b_t", p.loss_formula.b_t);
+    p.loss_formula.b_w = f.number("b_w", p.loss_formula.b_w);
+    p.loss_formula.b_p = f.number("b_p", p.loss_formula.b_p);
+    f.finish();
+  } else {
+    ctx.error(ctx.where[r.field("loss_model")], r.field("loss_model"), "\"" + model + "\"",
+              "must be \"ideal\", \"map\" or \"formula\"");
+  }
+  if (model != "map" && r.has("efficiency_map")) r.path("efficiency_map", false);  // allowed, unused
+  if (model != "formula" && r.has("loss_formula")) r.sub("loss_formula");
+  r.finish();
+  return p;
+}
+
+plant::BatteryRcParams read_battery(Reader r) {
+  plant::BatteryRcParams p;
+  p.cell_capacity_Ah = r.number("cell_capacity_Ah", p.cell_capacity_Ah);
+  p.cell_emf_min_V = r.number("cell_emf_min_V", p.cell_emf_min_V);
+  p.cell_emf_max_V = r.number("cell_emf_max_V", p.cell_emf_max_V);
+  p.soc_min = r.number("soc_min", p.soc_min);
+  p.soc_max = r.number("soc_max", p.soc_max);
+  p.soc_initial = r.number("soc_initial", p.soc_initial);
+  p.cell_current_max_A = r.opt_number("cell_current_max_A");
+  p.r0_cell_Ohm = r.opt_number("r0_cell_Ohm");
+  p.r1_cell_Ohm = r.opt_number("r1_cell_Ohm");
+  p.c1_cell_F = r.opt_number("c1_cell_F");
+  p.efficiency = r.number("efficiency", p.efficiency);
+  p.cell_current_efficiency_A = r.opt_number("cell_current_efficiency_A");
+  // a pack of more than 100 000 cells in either direction is a typo, not a battery
+  p.cells_series = r.small_integer("cells_series", p.cells_series, 1, 100000);
+  p.strings_parallel = r.small_integer("strings_parallel", p.strings_parallel, 1, 100000);
+  r.finish();
+  return p;
+}
+
+plant::RoadLoadParams read_road(Reader r, Context& ctx) {
+  plant::RoadLoadParams p;
+  const std::string form = r.text("form", "coefficients");
+  static constexpr std::array<std::string_view, 4> kCoefficientKeys = {"rolling_coefficient", "air_density_kg_m3",
+                                                                       "frontal_area_m2", "drag_coefficient"};
+  static constexpr std::array<std::string_view, 3> kCoastDownKeys = {"f0_N", "f1_N_s_m", "f2_N_s2_m2"};
+  // the keys of the other form are ignored with a warning, so that `--set road.form=...`
+  // can switch forms on a vehicle file that gives the other one
+  const auto ignore = [&](const auto& keys) {
+    for (std::string_view key : keys) {
+      if (!r.has(key)) continue;
+      const toml::node* n = r.find(key);
+      ctx.warn(ctx.where[r.field(key)], r.field(key), n != nullptr ? node_text(*n) : "",
+               "ignored: road.form is \"" + form + "\"");
+    }
+  };
+  if (form == "coefficients") {
+    p.form = plant::RoadLoadForm::kCoefficients;
+    p.rolling_coefficient = r.required_number("rolling_coefficient");
+    p.air_density_kg_m3 = r.number("air_density_kg_m3", p.air_density_kg_m3);
+    p.frontal_area_m2 = r.required_number("frontal_area_m2");
+    p.drag_coefficient = r.required_number("drag_coefficient");
+    ignore(kCoastDownKeys);
+  } else if (form == "coast-down") {
+    p.form = plant::RoadLoadForm::kCoastDown;
+    p.f0_N = r.required_number("f0_N");
+    p.f1_N_s_m = r.number("f1_N_s_m", 0.0);
+    p.f2_N_s2_m2 = r.required_number("f2_N_s2_m2");
+    ignore(kCoefficientKeys);
+  } else {
+    ctx.error(ctx.where[r.field("form")], r.field("form"), "\"" + form + "\"",
+              "must be \"coefficients\" or \"coast-down\"");
+    // the keys of both forms are known: no follow-on "unknown key"
+    for (std::string_view key : kCoefficientKeys) r.find(key);
+    for (std::string_view key : kCoastDownKeys) r.find(key);
+  }
+  const FileRef slope = r.path("slope_table", false);
+  if (!slope.empty()) p.slope_rad = load_curve(slope, r.field("slope"), ctx);
+  r.finish();
+  return p;
+}
+
+plant::VehicleBodyParams read_body(Reader r) {
+  plant::VehicleBodyParams b;
+  b.mass_kg = r.required_number("mass_kg");
+  b.wheel_radius_m = r.required_number("wheel_radius_m");
+  b.gear_ratio = r.required_number("gear_ratio");
+  b.speed_initial_m_s = r.number("speed_initial_m_s", 0.0);
+  r.finish();
+  return b;
+}
+
+plant::PropDriverParams read_driver(Reader r) {
+  plant::PropDriverParams d;
+  d.gain = r.required_number("gain");
+  d.request_max = r.number("request_max", d.request_max);
+  d.request_min = r.number("request_min", -d.request_max);
+  r.finish();
+  return d;
+}
+
+plant::BrakeParams read_brake(Reader r) {
+  plant::BrakeParams b;
+  b.enabled = r.flag("enabled", b.enabled);
+  b.library_gain = r.flag("library_gain", b.library_gain);
+  b.after_rotor_inertia = r.flag("after_rotor_inertia", b.after_rotor_inertia);
+  r.finish();
+  return b;
+}
+
+plant::MapIceParams read_ice(Reader r, Context& ctx) {
+  plant::MapIceParams p;
+  const std::string input = r.text("input", "power");
+  if (input == "power") {
+    p.input = plant::IceInput::kPower;
+  } else if (input == "torque") {
+    p.input = plant::IceInput::kTorque;
+  } else {
+    ctx.error(ctx.where[r.field("input")], r.field("input"), "\"" + input + "\"", "must be \"power\" or \"torque\"");
+  }
+  p.inertia_kgm2 = r.number("inertia_kgm2", p.inertia_kgm2);
+  p.speed_initial_rad_s = r.number("speed_initial_rad_s", p.speed_initial_rad_s);
+  p.control_gain_Nm_W = r.number("control_gain_Nm_W", p.control_gain_Nm_W);
+  p.fuel_lhv_J_kg = r.number("fuel_lhv_J_kg", p.fuel_lhv_J_kg);
+  p.fuel_density_kg_m3 = r.number("fuel_density_kg_m3", p.fuel_density_kg_m3);
+  p.on_off = r.flag("on_off", false);
+  const FileRef curve = r.path("torque_max_table", true);
+  if (!curve.empty()) p.torque_max_Nm = load_curve(curve, r.field("torque_max"), ctx);
+  const FileRef sfc = r.path("sfc_map", true);
+  if (!sfc.empty()) p.sfc_g_kWh = load_map(sfc, r.field("sfc_map"), ctx);
+  r.finish();
+  return p;
+}
+
+// The timing every built-in ECU has: its period and its latency (whole numbers of steps).
+void read_ecu_timing(Reader& r, EcuTiming& t) {
+  t.period_s = r.number("period_s", t.period_s);
+  t.latency_s = r.number("latency_s", t.latency_s);
+}
+
+}  // namespace ehpt::hil::detail

@@ -1,0 +1,247 @@
+#include "hil/config_reader.hpp"
+
+#include <filesystem>
+#include <sstream>
+
+#include "hil/toml_guard.hpp"
+#include "io/number_format.hpp"
+#include "io/text_file.hpp"
+
+namespace fs = std::filesystem;
+
+namespace ehpt::hil::detail {
+
+std::string node_text(const toml::node& n) {
+  std::ostringstream s;
+  if (n.is_table()) return "(a table)";
+  if (n.is_array()) return "(an array)";
+  // floats as the shortest text that reads back (toml++ prints 2.2 as 2.2000000000000002)
+  if (const auto d = n.value_exact<double>()) return io::number_text(*d);
+  n.visit([&](const auto& v) { s << v; });
+  return s.str();
+}
+
+std::string location(const toml::node* n, const std::string& fallback) {
+  if (n == nullptr || !n->source().path) return fallback;
+  const std::string& p = *n->source().path;
+  if (p.rfind("--set", 0) == 0) return p;
+  return p + ":" + std::to_string(n->source().begin.line);
+}
+
+// ref: the key that names the file (the vehicle file), so that a missing file is reported
+// there; nullptr for the scenario itself.
+bool parse_toml(const std::string& path, toml::table& out, Context& ctx, const FileRef* ref) {
+  std::string content, reason;
+  if (!io::read_text_file(path, content, reason)) {
+    if (ref != nullptr) {
+      ctx.unreadable(*ref, reason);
+    } else {
+      ctx.errors.push_back(path + ": cannot read: " + reason);
+    }
+    return false;
+  }
+  if (const int line = line_with_too_many_dots(content); line != 0) {
+    ctx.errors.push_back(path + ":" + std::to_string(line) + ": more than " + std::to_string(kMaxDotsPerLine) +
+                         " dots on one line (a dotted key that long would overflow the TOML parser)");
+    return false;
+  }
+  try {
+    out = toml::parse(content, path);
+    return true;
+  } catch (const toml::parse_error& e) {
+    const auto& src = e.source();
+    ctx.errors.push_back(path + ":" + std::to_string(src.begin.line) + ": TOML syntax: " +
+                         std::string(e.description()));
+  }
+  return false;
+}
+
+namespace {
+std::string toml_quote(const std::string& v) {
+  std::string out = "\"";
+  for (char c : v) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out + "\"";
+}
+
+}  // namespace
+
+// "a.b.c=value": the value is parsed as TOML (number, bool, quoted string, array), or taken as text.
+bool parse_override(const std::string& text, toml::table& out, Context& ctx) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos || eq == 0) {
+    ctx.errors.push_back("--set " + text + ": expected key=value, e.g. --set vehicle.battery.soc_initial=0.6");
+    return false;
+  }
+  const std::string key = text.substr(0, eq);
+  const std::string value = text.substr(eq + 1);
+  const std::string label = "--set " + (text.size() <= 200 ? text : text.substr(0, 80) + "...");
+  if (line_with_too_many_dots(text) != 0) {
+    ctx.errors.push_back(label + ": more than " + std::to_string(kMaxDotsPerLine) +
+                         " dots on one line (a dotted key that long would overflow the TOML parser)");
+    return false;
+  }
+  try {
+    out = toml::parse(key + " = " + value, label);
+  } catch (const toml::parse_error&) {
+    try {
+      out = toml::parse(key + " = " + toml_quote(value), label);
+    } catch (const toml::parse_error& e) {
+      ctx.errors.push_back(label + ": cannot parse: " + std::string(e.description()));
+      return false;
+    }
+  }
+  return true;
+}
+
+// ---- CSV-backed tables ------------------------------------------------------------------
+
+namespace {
+
+// Reads the CSV named by ref. A file that cannot be read is reported at the key that names
+// it; its follow-on problems (no table) are not.
+bool read_table(const FileRef& ref, const std::string& field, io::CsvTable& t, Context& ctx) {
+  ctx.failed_tables.insert(field);
+  std::string content, reason;
+  if (!io::read_text_file(ref.path, content, reason)) {
+    ctx.unreadable(ref, reason);
+    return false;
+  }
+  return io::parse_csv_table(ref.path, content, t, ctx.errors);
+}
+
+// Remembers the CSV behind a table; csv_columns[k] is the CSV column of table column k.
+void keep_source(const std::string& field, const io::CsvTable& t, const std::vector<int>& csv_columns, Context& ctx) {
+  TableSource s{t.path, t.lines, {}, {}};
+  for (int c : csv_columns) {
+    s.columns.push_back(t.header[static_cast<std::size_t>(c)]);
+    s.text.push_back(t.text[static_cast<std::size_t>(c)]);
+  }
+  ctx.tables[field] = std::move(s);
+  ctx.failed_tables.erase(field);
+}
+
+}  // namespace
+
+// Cycle: time_s and speed_kmh or speed_m_s; other columns ignored. After its last row the
+// last speed is held, or the cycle repeats (periodic).
+plant::Table1d load_cycle(const FileRef& ref, const std::string& field, bool periodic, Context& ctx) {
+  io::CsvTable t;
+  if (!read_table(ref, field, t, ctx)) return {};
+  const int ti = t.column_index("time_s");
+  int vi = t.column_index("speed_m_s");
+  double scale = 1.0;
+  if (vi < 0) {
+    vi = t.column_index("speed_kmh");
+    scale = 1.0 / 3.6;
+  }
+  if (ti < 0 || vi < 0) {
+    std::string found;
+    for (const auto& h : t.header) found += (found.empty() ? "" : ", ") + h;
+    ctx.errors.push_back(t.path + ":" + std::to_string(t.header_line) + ": header: expected a time_s column and a " +
+                         "speed_kmh or speed_m_s column (found " + found + ")");
+    return {};
+  }
+  std::vector<double> v = t.columns[static_cast<std::size_t>(vi)];
+  for (double& s : v) s *= scale;
+  keep_source(field, t, {ti, vi}, ctx);
+  return plant::Table1d(t.columns[static_cast<std::size_t>(ti)], std::move(v),
+                        periodic ? plant::Extrapolation::kPeriodic : plant::Extrapolation::kHold);
+}
+
+plant::Table1d load_curve(const FileRef& ref, const std::string& field, Context& ctx) {
+  io::CsvTable t;
+  if (!read_table(ref, field, t, ctx)) return {};
+  if (t.header.size() < 2) {
+    ctx.errors.push_back(t.path + ":" + std::to_string(t.header_line) + ": header: expected two columns (x, y)");
+    return {};
+  }
+  keep_source(field, t, {0, 1}, ctx);
+  return plant::Table1d(t.columns[0], t.columns[1], plant::Extrapolation::kHold);
+}
+
+// Tidy 2-D map "u1, u2, value" sorted by u1 then u2 (data/README.md) -> grid.
+plant::Table2d load_map(const FileRef& ref, const std::string& field, Context& ctx) {
+  io::CsvTable t;
+  if (!read_table(ref, field, t, ctx)) return {};
+  const std::string& path = t.path;
+  if (t.header.size() != 3) {
+    ctx.errors.push_back(path + ":" + std::to_string(t.header_line) +
+                         ": header: expected three columns (row axis, column axis, value)");
+    return {};
+  }
+  std::vector<double> u1, u2;
+  for (std::size_t r = 0; r < t.rows(); ++r) {
+    const double a = t.columns[0][r], b = t.columns[1][r];
+    if (u1.empty() || a != u1.back()) {
+      if (!u1.empty() && !(a > u1.back())) {
+        ctx.errors.push_back(path + ":" + std::to_string(t.lines[r]) + ": " + field + ", column " + t.header[0] +
+                             " = " + t.text[0][r] + ": row axis must be strictly increasing");
+        return {};
+      }
+      u1.push_back(a);
+    }
+    if (u1.size() == 1) {
+      if (!u2.empty() && !(b > u2.back())) {
+        ctx.errors.push_back(path + ":" + std::to_string(t.lines[r]) + ": " + field + ", column " + t.header[1] +
+                             " = " + t.text[1][r] + ": column axis must be strictly increasing");
+        return {};
+      }
+      u2.push_back(b);
+    }
+  }
+  if (t.rows() != u1.size() * u2.size()) {
+    ctx.errors.push_back(path + ": " + field + ": " + std::to_string(t.rows()) + " rows, a full " +
+                         std::to_string(u1.size()) + " x " + std::to_string(u2.size()) + " grid needs " +
+                         std::to_string(u1.size() * u2.size()));
+    return {};
+  }
+  for (std::size_t r = 0; r < t.rows(); ++r) {
+    if (t.columns[0][r] != u1[r / u2.size()] || t.columns[1][r] != u2[r % u2.size()]) {
+      ctx.errors.push_back(path + ":" + std::to_string(t.lines[r]) + ": " + field +
+                           ": grid point out of order (rows must be sorted by the first column, then the second)");
+      return {};
+    }
+  }
+  keep_source(field, t, {0, 1, 2}, ctx);
+  return plant::Table2d(std::move(u1), std::move(u2), t.columns[2]);
+}
+
+// Gives plant/ problems the file and line their value came from; a problem in a table cell
+// gets the CSV line, column and the value as written (a cycle in km/h stays in km/h).
+void report_plant_problems(const Problems& problems, Context& ctx, std::vector<std::string>* sink) {
+  for (const plant::Problem& pr : problems.list()) {
+    // a table whose file failed to read, or a value the loader rejected, was reported already
+    if (sink == nullptr && ctx.reported.count(pr.field) != 0) continue;
+    bool reported = false;
+    for (const std::string& failed : ctx.failed_tables) reported = reported || pr.field.rfind(failed, 0) == 0;
+    if (reported) continue;
+    std::string loc, field = pr.field, value = pr.value;
+    if (const auto t = ctx.tables.find(pr.field); t != ctx.tables.end()) {
+      const TableSource& src = t->second;
+      loc = src.path;
+      if (pr.row >= 0 && static_cast<std::size_t>(pr.row) < src.lines.size()) {
+        const auto row = static_cast<std::size_t>(pr.row);
+        loc += ":" + std::to_string(src.lines[row]);
+        if (pr.column >= 0 && static_cast<std::size_t>(pr.column) < src.columns.size()) {
+          const auto col = static_cast<std::size_t>(pr.column);
+          field += ", column " + src.columns[col];
+          value = src.text[col][row];
+        }
+      }
+    }
+    if (loc.empty()) {
+      if (auto w = ctx.where.find(pr.field); w != ctx.where.end()) loc = w->second;
+    }
+    if (loc.empty()) loc = "(vehicle)";
+    if (sink != nullptr) {
+      sink->push_back(loc + ": " + field + " = " + value + ": " + pr.expected);
+    } else {
+      ctx.error(loc, field, value, pr.expected);
+    }
+  }
+}
+
+}  // namespace ehpt::hil::detail

@@ -1,0 +1,282 @@
+#pragma once
+// The layered TOML reader behind load_scenario, shared by the scenario loader, the component
+// readers (hil/config_components.hpp) and each vehicle kind's reader (hil/vehicles.cpp).
+// Start-up only. Every problem is collected with the file and line its value came from.
+
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <toml++/toml.h>
+
+#include "io/csv_table.hpp"
+#include "plant/problems.hpp"
+#include "plant/table.hpp"
+
+namespace ehpt::hil::detail {
+
+using plant::Problems;
+
+// A value as written, for messages: floats as the shortest text that reads back.
+std::string node_text(const toml::node& n);
+// "file:line" of a node, or the --set that gave it; fallback if it has no source.
+std::string location(const toml::node* n, const std::string& fallback);
+
+// A table loaded from CSV, kept so that a problem plant/ finds in a cell can be reported
+// with the file line, the CSV column and the value as written (before unit conversion).
+struct TableSource {
+  std::string path;
+  std::vector<int> lines;                       // file line of each table row
+  std::vector<std::string> columns;             // table column (0 axis, 1, 2) -> CSV header name
+  std::vector<std::vector<std::string>> text;   // table column -> the fields as written
+};
+
+// A file named by a key: where the key is, the path as written, and the path resolved.
+struct FileRef {
+  std::string path;     // relative to the folder of the file that named it
+  std::string written;  // as in the file
+  std::string where;    // "file:line" of the key
+  std::string field;    // dotted key
+  bool empty() const { return path.empty(); }
+};
+
+// Collects messages and remembers where each field's value came from, so that problems
+// found later by plant/ validate() can be given a file and line.
+struct Context {
+  std::vector<std::string> errors;
+  std::vector<std::string> warnings;
+  std::map<std::string, std::string> where;    // field -> "file:line"
+  std::map<std::string, TableSource> tables;   // field -> its CSV
+  std::set<std::string> failed_tables;  // fields whose file could not be read: no follow-on problems
+
+  std::set<std::string> reported;  // fields with a problem already: validate() need not repeat it
+
+  void error(const std::string& loc, const std::string& field, const std::string& value,
+             const std::string& expected) {
+    errors.push_back(loc + ": " + field + (value.empty() ? "" : " = " + value) + ": " + expected);
+    reported.insert(field);
+  }
+  void warn(const std::string& loc, const std::string& field, const std::string& value, const std::string& why) {
+    warnings.push_back(loc + ": " + field + (value.empty() ? "" : " = " + value) + ": " + why);
+  }
+  // A file named by ref cannot be read: say so at the key that names it.
+  void unreadable(const FileRef& ref, const std::string& reason) {
+    error(ref.where, ref.field, "\"" + ref.written + "\"", "cannot read " + ref.path + ": " + reason);
+  }
+};
+
+// A view of one table through several layers, highest priority first (--set overrides,
+// the scenario's [vehicle] table, the vehicle file). Unknown keys in any layer are errors.
+class Reader {
+ public:
+  // where: the location of this table (for keys that are missing from it), default the file
+  Reader(std::vector<const toml::table*> layers, std::string prefix, std::string file, Context& ctx,
+         std::string where = "")
+      : layers_(std::move(layers)), prefix_(std::move(prefix)), file_(std::move(file)), ctx_(ctx),
+        where_(where.empty() ? file_ : std::move(where)) {}
+
+  const std::string& name() const { return prefix_; }
+  const std::string& where() const { return where_; }
+
+  std::string field(std::string_view key) const { return prefix_.empty() ? std::string(key) : prefix_ + "." + std::string(key); }
+
+  const toml::node* find(std::string_view key) {
+    used_.insert(std::string(key));
+    for (const toml::table* t : layers_) {
+      if (t == nullptr) continue;
+      if (const toml::node* n = t->get(key)) {
+        ctx_.where[field(key)] = location(n, file_);
+        return n;
+      }
+    }
+    ctx_.where[field(key)] = file_ + " (default)";
+    return nullptr;
+  }
+  bool has(std::string_view key) const { return layer_of(key) >= 0; }
+  // The layer that gives key (0 is the highest: the last --set), -1 if none does.
+  int layer_of(std::string_view key) const {
+    for (std::size_t i = 0; i < layers_.size(); ++i) {
+      if (layers_[i] != nullptr && layers_[i]->get(key) != nullptr) return static_cast<int>(i);
+    }
+    return -1;
+  }
+
+  std::optional<double> opt_number(std::string_view key) {
+    const toml::node* n = find(key);
+    if (n == nullptr) return std::nullopt;
+    if (auto v = n->value<double>()) return *v;  // integers convert too
+    ctx_.error(location(n, file_), field(key), node_text(*n), "must be a number");
+    return std::nullopt;
+  }
+  double number(std::string_view key, double fallback) { return opt_number(key).value_or(fallback); }
+  double required_number(std::string_view key) {
+    if (!has(key)) {
+      ctx_.error(where_, field(key), "", "missing (required number)");
+      find(key);
+      return std::nan("");
+    }
+    return opt_number(key).value_or(std::nan(""));
+  }
+  std::int64_t integer(std::string_view key, std::int64_t fallback) {
+    const toml::node* n = find(key);
+    if (n == nullptr) return fallback;
+    if (auto v = n->value_exact<std::int64_t>()) return *v;
+    ctx_.error(location(n, file_), field(key), node_text(*n), "must be a whole number");
+    return fallback;
+  }
+  // A whole number in [lo, hi], checked before it is narrowed, so that 2^32 + 100 is
+  // reported as written instead of running as 100.
+  int small_integer(std::string_view key, int fallback, int lo, int hi) {
+    const toml::node* n = find(key);
+    if (n == nullptr) return fallback;
+    const auto v = n->value_exact<std::int64_t>();
+    if (v && *v >= lo && *v <= hi) return static_cast<int>(*v);
+    ctx_.error(location(n, file_), field(key), node_text(*n),
+               "must be a whole number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    return fallback;
+  }
+  bool flag(std::string_view key, bool fallback) {
+    const toml::node* n = find(key);
+    if (n == nullptr) return fallback;
+    if (auto v = n->value_exact<bool>()) return *v;
+    ctx_.error(location(n, file_), field(key), node_text(*n), "must be true or false");
+    return fallback;
+  }
+  std::string text(std::string_view key, const std::string& fallback) {
+    const toml::node* n = find(key);
+    if (n == nullptr) return fallback;
+    if (auto v = n->value_exact<std::string>()) return *v;
+    ctx_.error(location(n, file_), field(key), node_text(*n), "must be a string");
+    return fallback;
+  }
+  // A file name, relative to the folder of the file that gave it (--set: the current folder).
+  FileRef path(std::string_view key, bool required) {
+    const toml::node* n = find(key);
+    if (n == nullptr) {
+      if (required) ctx_.error(where_, field(key), "", "missing (required file name)");
+      return {};
+    }
+    auto v = n->value_exact<std::string>();
+    if (!v || v->empty()) {
+      ctx_.error(location(n, file_), field(key), node_text(*n), "must be a file name (a non-empty string)");
+      return {};
+    }
+    std::filesystem::path p(*v);
+    if (p.is_relative() && n->source().path && n->source().path->rfind("--set", 0) != 0) {
+      p = std::filesystem::path(*n->source().path).parent_path() / p;
+    }
+    return {p.lexically_normal().string(), *v, location(n, file_), field(key)};
+  }
+  std::vector<std::string> strings(std::string_view key) {
+    std::vector<std::string> out;
+    const toml::node* n = find(key);
+    if (n == nullptr) return out;
+    const toml::array* a = n->as_array();
+    if (a == nullptr) {
+      ctx_.error(location(n, file_), field(key), node_text(*n), "must be an array of strings");
+      return out;
+    }
+    for (const toml::node& e : *a) {
+      if (auto s = e.value_exact<std::string>()) {
+        out.push_back(*s);
+      } else {
+        ctx_.error(location(&e, file_), field(key), node_text(e), "must be a string");
+      }
+    }
+    return out;
+  }
+
+  // An array of tables ([[key]] ... in TOML): one reader each, named key[0], key[1], ...
+  // The highest layer that gives the array gives all of it.
+  std::vector<Reader> table_array(std::string_view key) {
+    std::vector<Reader> out;
+    const toml::node* n = find(key);
+    if (n == nullptr) return out;
+    const toml::array* a = n->as_array();
+    if (a == nullptr) {
+      ctx_.error(location(n, file_), field(key), node_text(*n), "must be an array of tables ([[" + field(key) + "]])");
+      return out;
+    }
+    for (std::size_t i = 0; i < a->size(); ++i) {
+      const toml::node& e = *a->get(i);
+      const std::string name = field(key) + "[" + std::to_string(i) + "]";
+      if (const toml::table* t = e.as_table()) {
+        ctx_.where[name] = location(&e, file_);
+        out.emplace_back(std::vector<const toml::table*>{t}, name, file_, ctx_, location(&e, file_));
+      } else {
+        ctx_.error(location(&e, file_), name, node_text(e), "must be a table");
+      }
+    }
+    return out;
+  }
+
+  Reader sub(std::string_view key) {
+    used_.insert(std::string(key));
+    std::vector<const toml::table*> layers;
+    std::string where;  // the lowest layer's table: usually the vehicle file's [table] line
+    for (const toml::table* t : layers_) {
+      const toml::node* n = t == nullptr ? nullptr : t->get(key);
+      if (n != nullptr && !n->is_table()) {
+        ctx_.error(location(n, file_), field(key), node_text(*n), "must be a table");
+        n = nullptr;
+      }
+      layers.push_back(n == nullptr ? nullptr : n->as_table());
+      if (n != nullptr) where = location(n, file_);
+    }
+    return Reader(std::move(layers), field(key), file_, ctx_, where.empty() ? where_ : where);
+  }
+
+  // Reports every key no reader asked for.
+  void finish() {
+    for (const toml::table* t : layers_) {
+      if (t == nullptr) continue;
+      for (const auto& [k, n] : *t) {
+        if (used_.count(std::string(k.str())) == 0) {
+          ctx_.error(location(&n, file_), field(k.str()), "", "unknown key");
+        }
+      }
+    }
+  }
+
+ private:
+  std::vector<const toml::table*> layers_;
+  std::string prefix_, file_;
+  Context& ctx_;
+  std::string where_;
+  std::set<std::string> used_;
+};
+
+// Parses a TOML file (a regular file of at most 64 MiB, no over-long dotted keys). ref: the
+// key that names the file, so that a missing file is reported there; nullptr for the
+// scenario itself.
+bool parse_toml(const std::string& path, toml::table& out, Context& ctx, const FileRef* ref = nullptr);
+// "a.b.c=value" as given to --set: the value as TOML (number, bool, quoted string, array), or text.
+bool parse_override(const std::string& text, toml::table& out, Context& ctx);
+
+// CSV-backed tables, remembered in ctx so that a problem in a cell is reported at its line.
+plant::Table1d load_cycle(const FileRef& ref, const std::string& field, bool periodic, Context& ctx);
+plant::Table1d load_curve(const FileRef& ref, const std::string& field, Context& ctx);
+plant::Table2d load_map(const FileRef& ref, const std::string& field, Context& ctx);
+
+// Gives plant/ problems the file and line their value came from (sink: warnings instead).
+void report_plant_problems(const Problems& problems, Context& ctx, std::vector<std::string>* sink = nullptr);
+
+template <class Signals>
+void check_signals(const Signals& available, const std::vector<std::string>& wanted, Context& ctx) {
+  for (const std::string& w : wanted) {
+    bool found = false;
+    for (const auto& s : available) found = found || s.name == w;
+    if (!found) {
+      std::string names;
+      for (const auto& s : available) names += (names.empty() ? "" : ", ") + std::string(s.name);
+      ctx.error(ctx.where["output.signals"], "output.signals", "\"" + w + "\"", "unknown signal; available: " + names);
+    }
+  }
+}
+
+
+}  // namespace ehpt::hil::detail
