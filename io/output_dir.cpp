@@ -354,6 +354,13 @@ bool OutputDir::open(const std::string& final_dir, std::string& error) {
   return true;
 }
 
+bool OutputDir::committed() {
+  committed_ = true;
+  sync_path(parent_of(final_));  // the rename itself on disk
+  lock_.release();
+  return true;
+}
+
 bool OutputDir::commit(std::string& error, bool replace_earlier) {
   if (!created_partial_ || committed_) {
     error = final_ + ": nothing to commit";
@@ -389,10 +396,7 @@ bool OutputDir::commit(std::string& error, bool replace_earlier) {
       error = final_ + ": cannot rename the results into place: " + errno_text() + kept;
       return false;
     }
-    committed_ = true;
-    sync_path(parent_of(final_));
-    lock_.release();
-    return true;
+    return committed();
   }
 
   // DIR exists: check it through a descriptor, so that what was checked is what is removed
@@ -410,10 +414,7 @@ bool OutputDir::commit(std::string& error, bool replace_earlier) {
       error = final_ + ": cannot rename the results into place: " + errno_text() + kept;
       return false;
     }
-    committed_ = true;
-    sync_path(parent_of(final_));
-    lock_.release();
-    return true;
+    return committed();
   }
   if (!replace_earlier) {
     ::close(dirfd);

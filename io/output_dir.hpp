@@ -75,6 +75,8 @@ class OutputDir {
   const std::vector<std::string>& warnings() const { return warnings_; }
 
  private:
+  bool committed();  // after the results are in place: flush the rename, release the lock
+
   std::string final_, partial_;
   DirLock lock_;
   bool created_partial_ = false, committed_ = false;
