@@ -4,7 +4,9 @@
 
 #include "alloc_counter.hpp"
 #include "hil/config.hpp"
+#include "ecu/ev_follower.hpp"
 #include "hil/runner.hpp"
+#include "hil/simulation.hpp"
 #include "plant/bev_plant.hpp"
 #include "plant/drive_rigs.hpp"
 #include "plant/psd_plant.hpp"
@@ -14,10 +16,12 @@
 namespace ehpt::hil {
 namespace {
 
-template <class Plant, class Integrator>
-std::size_t allocations_over_run(const Plant& plant, std::int64_t steps) {
+template <class Plant, class Integrator, class Controller = NoController>
+std::size_t allocations_over_run(const Plant& plant, std::int64_t steps, Controller* controller = nullptr,
+                                 std::int64_t latency_steps = 0) {
   std::vector<int> columns{0, 1, 2};
-  Runner<Plant, Integrator> runner(plant, 1e-3, steps, 100, columns, steps);  // start-up: may allocate
+  // start-up: may allocate
+  Runner<Plant, Integrator, Controller> runner(plant, 1e-3, steps, 100, columns, steps, controller, 1, latency_steps);
   const std::size_t before = test::allocation_count();
   runner.run();  // run phase
   const std::size_t after = test::allocation_count();
@@ -25,10 +29,26 @@ std::size_t allocations_over_run(const Plant& plant, std::int64_t steps) {
   return after - before;
 }
 
-TEST(NoAllocation, BevWithBothSolvers) {
+TEST(NoAllocation, BevWithBothSolversAndItsEcu) {
   const plant::BevPlant plant(test::mbev("data/cycles/cycle_nedc.csv"));
-  EXPECT_EQ((allocations_over_run<plant::BevPlant, solvers::Rk4<plant::BevPlant>>(plant, 100000)), 0u);
-  EXPECT_EQ((allocations_over_run<plant::BevPlant, solvers::ImplicitEuler<plant::BevPlant>>(plant, 100000)), 0u);
+  ecu::EvFollower follower;
+  using P = plant::BevPlant;
+  EXPECT_EQ((allocations_over_run<P, solvers::Rk4<P>>(plant, 100000, &follower)), 0u);
+  EXPECT_EQ((allocations_over_run<P, solvers::ImplicitEuler<P>>(plant, 100000, &follower)), 0u);
+  // commands in flight (latency 7 steps): the ring of pending commands is sized at start-up
+  EXPECT_EQ((allocations_over_run<P, solvers::Rk4<P>>(plant, 100000, &follower, 7)), 0u);
+}
+
+// Through the facade the CLI uses: after make_simulation(), run() allocates nothing.
+TEST(NoAllocation, SimulationFacade) {
+  for (const char* scenario : {"scenarios/ev_nedc.toml", "scenarios/psecu2_nedc.toml"}) {
+    const Scenario sc = test::load(test::source_path(scenario), {"solver.duration_s=200", "vehicle.ecu.latency_s=0.005"});
+    const auto sim = make_simulation(sc, SimulationOptions{{}, 200000});
+    const std::size_t before = test::allocation_count();
+    sim->run();
+    EXPECT_EQ(test::allocation_count() - before, 0u) << scenario;
+    EXPECT_EQ(sim->step_index(), 200000) << scenario;
+  }
 }
 
 TEST(NoAllocation, PowerSplitHybridWithItsEcu) {
