@@ -608,6 +608,20 @@ TEST(CliOutputs, AnInterruptedRunKeepsTheEarlierRun) {
   const std::string out = (root / "run").string();
   ASSERT_EQ(ehpt_argv({"run", ehpt::test::source_path("scenarios/ev_sort1.toml"), "--quiet", "--out", out}).exit_code, 0);
   const std::string earlier = slurp(out + "/summary.json");
+  // while the run steps (its lock is taken after loading): it stays in its own folder
+  {
+    std::vector<std::string> args = {"run", ehpt::test::source_path("scenarios/ev_nedc.toml"), "--out", out};
+    args.insert(args.end(), kLongRun.begin(), kLongRun.end());
+    const pid_t pid = spawn_ehpt(args, "running");
+    ASSERT_TRUE(wait_for(out + ".ehpt-lock"));
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    kill(pid, SIGINT);
+    const Result r = wait_ehpt(pid, "running");
+    EXPECT_EQ(r.exit_code, 130) << r.err;
+    EXPECT_EQ(slurp(out + "/summary.json"), earlier);
+    EXPECT_HAS(r.err, "warning: the earlier run in " + out + " was kept; this run's outputs are in " + out + ".partial-");
+    EXPECT_HAS(r.out, "outputs       " + out + ".partial-");
+  }
   // a 2M-row cycle: the signal comes while it loads or while the run steps, either way
   {
     std::ofstream big(root / "big.csv");
