@@ -5,13 +5,6 @@
 
 namespace ehpt::plant {
 
-void validate(const VehicleBodyParams& p, const std::string& at, Problems& problems) {
-  problems.require_positive(at + ".mass_kg", p.mass_kg);
-  problems.require_positive(at + ".wheel_radius_m", p.wheel_radius_m);
-  problems.require_positive(at + ".gear_ratio", p.gear_ratio);
-  problems.require_non_negative(at + ".speed_initial_m_s", p.speed_initial_m_s);
-}
-
 void validate(const BevParams& p, Problems& problems) {
   validate(p.body, "vehicle", problems);
   validate(p.road, "road", problems);
@@ -78,12 +71,13 @@ struct BevPlant::Eval {
 };
 
 BevPlant::BevPlant(const BevParams& params)
-    : p_(params), drive_(params.drive), battery_(params.battery), road_(params.road, params.body.mass_kg) {
+    : p_(params), drive_(params.drive), battery_(params.battery), body_(params.body, params.road, params.brake) {
   g_over_r_ = p_.body.gear_ratio / p_.body.wheel_radius_m;
   mass_eff_kg_ = p_.body.mass_kg + p_.drive.inertia_kgm2 * g_over_r_ * g_over_r_;
   inv_mass_eff_kg_ = 1.0 / mass_eff_kg_;
-  brake_gain_ = brake_gain_N_per_Nm(p_.brake, p_.body);
-  if (p_.brake.after_rotor_inertia) brake_inertia_kg_ = brake_gain_ * p_.drive.inertia_kgm2 * g_over_r_;
+  if (p_.brake.after_rotor_inertia) {
+    brake_inertia_kg_ = body_.brake_gain_N_per_Nm() * p_.drive.inertia_kgm2 * g_over_r_;
+  }
 }
 
 BevPlant::State BevPlant::initial_state() const {
@@ -105,13 +99,12 @@ BevPlant::Modes BevPlant::initial_modes(const State& x0) const {
   const double drive_speed_rad_s = v * g_over_r_;
   const DriveOperatingPoint op = drive_.operate(u.driveTauRef_Nm, drive_speed_rad_s);
   // forces at the wheel; the friction brake supplies the braking the drive could not
-  const double grade_rad = road_.grade_rad(x[kDistance]);
-  const double rolling_N = road_.rolling_N(grade_rad);
-  const double speed_force_N = road_.speed_force_N(v);
+  const VehicleBody::Forces f = body_.forces(v, x[kDistance]);
+  const double grade_rad = f.grade_rad, rolling_N = f.rolling_N, speed_force_N = f.speed_force_N;
   const double unmet_braking_Nm = op.torque_Nm - u.driveTauRef_Nm;
-  double brake_N = unmet_braking_Nm > 0.0 ? brake_gain_ * unmet_braking_Nm : 0.0;
+  double brake_N = body_.brake_N(unmet_braking_Nm);
   const double tractive_N = op.torque_Nm * g_over_r_;
-  const double applied_N = tractive_N - road_.grade_force_N(grade_rad);
+  const double applied_N = tractive_N - f.grade_force_N;
   // stuck: the road reacts with the applied force, no acceleration; moving: road load and
   // brake oppose the motion (d = +1 forward, -1 backward)
   double road_N = applied_N, accel_m_s2 = 0.0;
@@ -122,10 +115,11 @@ BevPlant::Modes BevPlant::initial_modes(const State& x0) const {
     if (brake_inertia_kg_ > 0.0) {
       // MBEV's brake signal: max(0, unmet - J (G/r) a). Without the brake, a0 above; if the
       // signal is positive there, the active branch m_eff a = F - d k (unmet - J (G/r) a) holds
-      const double signal_N = brake_gain_ * unmet_braking_Nm - brake_inertia_kg_ * ((applied_N - road_N) * inv_mass_eff_kg_);
+      const double gain = body_.brake_gain_N_per_Nm();
+      const double signal_N = gain * unmet_braking_Nm - brake_inertia_kg_ * ((applied_N - road_N) * inv_mass_eff_kg_);
       if (signal_N > 0.0) {
-        accel_m_s2 = (applied_N - road_N - d * brake_gain_ * unmet_braking_Nm) / (mass_eff_kg_ - d * brake_inertia_kg_);
-        brake_N = brake_gain_ * unmet_braking_Nm - brake_inertia_kg_ * accel_m_s2;
+        accel_m_s2 = (applied_N - road_N - d * gain * unmet_braking_Nm) / (mass_eff_kg_ - d * brake_inertia_kg_);
+        brake_N = gain * unmet_braking_Nm - brake_inertia_kg_ * accel_m_s2;
       } else {
         brake_N = 0.0;
         accel_m_s2 = (applied_N - road_N) * inv_mass_eff_kg_;
@@ -151,41 +145,30 @@ BevPlant::AtRest BevPlant::at_rest(const State& x, const Inputs& u) const {
   const double tau_max_Nm = drive_.params().torque_max_Nm;
   const double torque_Nm = std::clamp(request_Nm, -tau_max_Nm, tau_max_Nm);
   const double unmet_braking_Nm = torque_Nm - request_Nm;
-  const double brake_N = unmet_braking_Nm > 0.0 ? brake_gain_ * unmet_braking_Nm : 0.0;
-  const double grade_rad = road_.grade_rad(x[kDistance]);
-  return {torque_Nm * g_over_r_ - road_.grade_force_N(grade_rad), road_.rolling_N(grade_rad) + brake_N};
+  const double brake_N = body_.brake_N(unmet_braking_Nm);
+  const double grade_rad = body_.road().grade_rad(x[kDistance]);
+  return {torque_Nm * g_over_r_ - body_.road().grade_force_N(grade_rad), body_.road().rolling_N(grade_rad) + brake_N};
 }
 
 void BevPlant::derivatives(double, const State& x, const Modes& m, const Inputs& u, State& dx) const {
   const Eval e = evaluate(x, m, u);
   const double v = x[kSpeed];
-  const double speed_abs = std::abs(v);
   dx[kSpeed] = e.accel_m_s2;
-  dx[kDistance] = v;
+  body_.derivatives(v, {e.grade_rad, e.rolling_N, e.speed_force_N, 0.0}, e.brake_N, dx.data() + kBodyAt);
   dx[kEmf] = battery_.demf_dt(e.battery);
   dx[kVrc] = battery_.dvrc_dt(e.battery, x[kVrc]);
-  dx[kAltitude] = e.grade_rad == 0.0 ? 0.0 : v * std::sin(e.grade_rad);
   // energy integrals for the audit (all zero while stuck because v = 0)
   dx[kBatteryOutJ] = e.battery.voltage_V * e.battery.current_A;
-  dx[kRoadJ] = e.rolling_N * speed_abs + e.speed_force_N * v;
   dx[kDriveLossJ] = e.drive.power_dc_W - e.drive.power_mech_W;
   dx[kBatteryLossJ] = e.battery.loss_W;
-  dx[kBrakeJ] = e.brake_N * speed_abs;
 }
 
 void BevPlant::crossings(double, const State& x, const Modes& m, const Inputs& u, double* z) const {
-  switch (m.motion) {
-    case Motion::kForward:
-      z[0] = x[kSpeed];
-      break;
-    case Motion::kBackward:
-      z[0] = -x[kSpeed];
-      break;
-    case Motion::kStuck: {
-      const AtRest r = at_rest(x, u);
-      z[0] = r.breakaway_N - std::abs(r.applied_N);
-      break;
-    }
+  if (m.motion != Motion::kStuck) {
+    z[0] = VehicleBody::moving_crossing(m.motion, x[kSpeed]);
+  } else {
+    const AtRest r = at_rest(x, u);
+    z[0] = VehicleBody::stuck_crossing(r.applied_N, r.breakaway_N);
   }
 }
 

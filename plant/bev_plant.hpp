@@ -18,10 +18,10 @@
 //             ds/dt = v,  dh/dt = v sin(alpha)
 //   stuck:    dv/dt = 0 while |tau G/r - m g sin(alpha)| <= F_roll + F_brake   (locked, §7.2)
 //
-// State (one flat vector):
-//   0 v (m/s), 1 s (m), 2 battery EMF E (V), 3 battery v_rc (V), 4 altitude h (m),
-//   5..9 energy integrals (J): battery terminal energy out, road-load work, drive losses,
-//   battery losses, brake dissipation. The integrals feed the energy audit:
+// State (one flat vector, offsets composed from the components' sizes): v (m/s); the
+// VehicleBody's s (m), h (m), road-load work and brake dissipation (J); the battery's E and
+// v_rc (V); the plant's energy integrals (J): battery terminal energy out, drive losses,
+// battery losses. The integrals feed the energy audit:
 //     stored-energy decrease = road work + drive losses + battery losses + brake
 //                              + change of kinetic energy (vehicle + rotor) + m g (h - h0)
 // Crossing 0 (one function per mode, always falling through zero):
@@ -40,33 +40,9 @@
 #include "plant/prop_driver.hpp"
 #include "plant/road_load.hpp"
 #include "plant/signals.hpp"
+#include "plant/vehicle_body.hpp"
 
 namespace ehpt::plant {
-
-struct VehicleBodyParams {
-  double mass_kg = 0.0;
-  double wheel_radius_m = 0.0;
-  double gear_ratio = 1.0;          // drive speed / wheel speed
-  double speed_initial_m_s = 0.0;
-};
-
-void validate(const VehicleBodyParams& p, const std::string& at, Problems& problems);
-
-struct BrakeParams {
-  bool enabled = true;
-  bool library_gain = false;  // reproduce MBEV's G*r gain instead of G/r (source defect)
-  // MBEV measures the torque for its brake after the rotor inertia: tau_shaft = tau - J dw/dt,
-  // so it also brakes J dw/dt in every deceleration (§10.3, correction of 2026-11-22). Off:
-  // the applied torque tau (no algebraic loop; differs by ~0.2 % Wh/km on NEDC).
-  bool after_rotor_inertia = false;
-};
-
-// Wheel force per N m of unmet braking torque at the drive shaft: G / r, or the MBEV's
-// G * r when reproducing that source defect (§10.3); 0 without a brake.
-inline double brake_gain_N_per_Nm(const BrakeParams& brake, const VehicleBodyParams& body) {
-  if (!brake.enabled) return 0.0;
-  return brake.library_gain ? body.gear_ratio * body.wheel_radius_m : body.gear_ratio / body.wheel_radius_m;
-}
 
 struct BevParams {
   VehicleBodyParams body;
@@ -81,9 +57,16 @@ void validate(const BevParams& p, Problems& problems);
 
 class BevPlant {
  public:
-  static constexpr int kSpeed = 0, kDistance = 1, kEmf = 2, kVrc = 3, kAltitude = 4;
-  static constexpr int kBatteryOutJ = 5, kRoadJ = 6, kDriveLossJ = 7, kBatteryLossJ = 8, kBrakeJ = 9;
-  static constexpr int kNumStates = 10;
+  // the state, composed: [v | VehicleBody | BatteryRc | energy integrals]
+  static constexpr int kSpeed = 0;
+  static constexpr int kBodyAt = kSpeed + 1;
+  static constexpr int kBatteryAt = kBodyAt + VehicleBody::kNumStates;
+  static constexpr int kIntegralsAt = kBatteryAt + BatteryRc::kNumStates;
+  static constexpr int kNumStates = kIntegralsAt + 3;
+  static constexpr int kDistance = kBodyAt + VehicleBody::kDistance, kAltitude = kBodyAt + VehicleBody::kAltitude;
+  static constexpr int kRoadJ = kBodyAt + VehicleBody::kRoadJ, kBrakeJ = kBodyAt + VehicleBody::kBrakeJ;
+  static constexpr int kEmf = kBatteryAt + BatteryRc::kEmf, kVrc = kBatteryAt + BatteryRc::kVrc;
+  static constexpr int kBatteryOutJ = kIntegralsAt, kDriveLossJ = kIntegralsAt + 1, kBatteryLossJ = kIntegralsAt + 2;
   static constexpr int kNumCrossings = 1;
   using State = Eigen::Matrix<double, kNumStates, 1>;
   struct Modes {
@@ -142,11 +125,10 @@ class BevPlant {
   BevParams p_;
   MapDrive drive_;
   BatteryRc battery_;
-  RoadLoad road_;
+  VehicleBody body_;
   double g_over_r_ = 0.0;        // drive speed per vehicle speed (rad/m)
   double mass_eff_kg_ = 0.0;     // vehicle + rotor reflected
   double inv_mass_eff_kg_ = 0.0;
-  double brake_gain_ = 0.0;      // N per N m of unmet braking torque
   double brake_inertia_kg_ = 0.0;  // after_rotor_inertia: brake_gain * J * G/r (0 otherwise)
 };
 

@@ -65,7 +65,7 @@ PsdPlant::PsdPlant(const PsdParams& params)
       gen_(params.gen),
       mot_(params.mot),
       battery_(params.battery),
-      road_(params.road, params.body.mass_kg),
+      body_(params.body, params.road, params.brake),
       rho_(params.ring_sun_ratio) {
   g_over_r_ = p_.body.gear_ratio / p_.body.wheel_radius_m;
   r_over_g_ = 1.0 / g_over_r_;
@@ -77,7 +77,6 @@ PsdPlant::PsdPlant(const PsdParams& params)
   i11_ = m22_ / det;
   i12_ = -m12_ / det;
   i22_ = m11_ / det;
-  brake_gain_ = brake_gain_N_per_Nm(p_.brake, p_.body);
 }
 
 PsdPlant::State PsdPlant::initial_state() const {
@@ -104,12 +103,12 @@ PsdPlant::Eval PsdPlant::evaluate(double t_s, const State& x, const Modes& m, co
   e.mot = mot_.operate(u.motTauRef_Nm, w_r);
   const double tau_g = e.gen.torque_Nm, tau_m = e.mot.torque_Nm;
   // road, grade and the friction brake that supplies what mot could not brake
-  e.grade_rad = road_.grade_rad(x[kDistance]);
-  e.rolling_N = road_.rolling_N(e.grade_rad);
-  e.speed_force_N = road_.speed_force_N(e.speed_m_s);
-  e.grade_force_N = road_.grade_force_N(e.grade_rad);
-  const double unmet_braking_Nm = tau_m - u.motTauRef_Nm;
-  e.brake_N = unmet_braking_Nm > 0.0 ? brake_gain_ * unmet_braking_Nm : 0.0;
+  const VehicleBody::Forces f = body_.forces(e.speed_m_s, x[kDistance]);
+  e.grade_rad = f.grade_rad;
+  e.rolling_N = f.rolling_N;
+  e.speed_force_N = f.speed_force_N;
+  e.grade_force_N = f.grade_force_N;
+  e.brake_N = body_.brake_N(tau_m - u.motTauRef_Nm);
   // engine torque from the power loop, with dw_c/dt = a0 + a1 tau_ice
   double a0 = 0.0, a1 = 0.0, q2 = 0.0;
   if (m.motion == Motion::kStuck) {
@@ -117,7 +116,7 @@ PsdPlant::Eval PsdPlant::evaluate(double t_s, const State& x, const Modes& m, co
     a0 = (1.0 + rho_) * tau_g * a1;
   } else {
     const double resist_N =
-        resisting_force_N(m.motion, e.rolling_N, e.speed_force_N, e.grade_force_N, e.brake_N);
+        VehicleBody::resisting_N(m.motion, f, e.brake_N);
     q2 = tau_m - rho_ * tau_g - r_over_g_ * resist_N;
     a1 = i11_;
     a0 = i11_ * (1.0 + rho_) * tau_g + i12_ * q2;
@@ -143,36 +142,26 @@ PsdPlant::Eval PsdPlant::evaluate(double t_s, const State& x, const Modes& m, co
 
 void PsdPlant::derivatives(double t_s, const State& x, const Modes& m, const Inputs& u, State& dx) const {
   const Eval e = evaluate(t_s, x, m, u);
-  const double v = e.speed_m_s, speed_abs = std::abs(v);
   dx[kIceSpeed] = e.ice_accel_rad_s2;
   dx[kRingSpeed] = e.ring_accel_rad_s2;
-  dx[kDistance] = v;
+  body_.derivatives(e.speed_m_s, {e.grade_rad, e.rolling_N, e.speed_force_N, e.grade_force_N}, e.brake_N,
+                    dx.data() + kBodyAt);
   dx[kEmf] = battery_.demf_dt(e.battery);
   dx[kVrc] = battery_.dvrc_dt(e.battery, x[kVrc]);
   dx[kFuelKg] = e.fuel_rate_kg_s;
-  dx[kAltitude] = e.grade_rad == 0.0 ? 0.0 : v * std::sin(e.grade_rad);
   dx[kIceWorkJ] = e.ice_torque_Nm * x[kIceSpeed];
   dx[kBatteryOutJ] = e.battery.voltage_V * e.battery.current_A;
-  dx[kRoadJ] = e.rolling_N * speed_abs + e.speed_force_N * v;
   dx[kGenLossJ] = e.gen.power_dc_W - e.gen.power_mech_W;
   dx[kMotLossJ] = e.mot.power_dc_W - e.mot.power_mech_W;
   dx[kBatteryLossJ] = e.battery.loss_W;
-  dx[kBrakeJ] = e.brake_N * speed_abs;
 }
 
 void PsdPlant::crossings(double t_s, const State& x, const Modes& m, const Inputs& u, double* z) const {
-  switch (m.motion) {
-    case Motion::kForward:
-      z[0] = x[kRingSpeed];
-      break;
-    case Motion::kBackward:
-      z[0] = -x[kRingSpeed];
-      break;
-    case Motion::kStuck: {
-      const Eval e = evaluate(t_s, x, m, u);
-      z[0] = (e.rolling_N + e.brake_N) - std::abs(e.applied_N);
-      break;
-    }
+  if (m.motion != Motion::kStuck) {
+    z[0] = VehicleBody::moving_crossing(m.motion, x[kRingSpeed]);
+  } else {
+    const Eval e = evaluate(t_s, x, m, u);
+    z[0] = VehicleBody::stuck_crossing(e.applied_N, e.rolling_N + e.brake_N);
   }
 }
 
@@ -200,7 +189,8 @@ void PsdPlant::sense_from(const Eval& e, const State& x, const Modes& m, Sensors
   // flange B drives the final gear: traction power = (m dv/dt + resisting forces) v
   const double accel_m_s2 = e.ring_accel_rad_s2 * r_over_g_;
   const double v = e.speed_m_s;
-  const double resist_N = resisting_force_N(m.motion, e.rolling_N, e.speed_force_N, e.grade_force_N, e.brake_N);
+  const double resist_N =
+      VehicleBody::resisting_N(m.motion, {e.grade_rad, e.rolling_N, e.speed_force_N, e.grade_force_N}, e.brake_N);
   bus.motPowDelB_W = (p_.body.mass_kg * accel_m_s2 + resist_N) * v;
   const double pow_ab_W = (e.mot.torque_Nm - p_.mot.inertia_kgm2 * e.ring_accel_rad_s2) * w_r;
   bus.motPowDelAB_W = pow_ab_W;

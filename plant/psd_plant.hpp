@@ -25,9 +25,10 @@
 // torque and no fuel.
 // Friction brake: the braking mot could not deliver, F = (G/r) max(0, tau_m - motTauRef).
 //
-// State (one flat vector): 0 w_c (rad/s), 1 w_r (rad/s), 2 s (m), 3 E (V), 4 v_rc (V),
-// 5 fuel (kg), 6 altitude (m), 7..13 energy integrals (J): engine work, battery terminal
-// energy out, road-load work, gen losses, mot losses, battery losses, brake dissipation.
+// State (one flat vector, offsets composed from the components' sizes): w_c and w_r (rad/s);
+// the VehicleBody's s (m), h (m), road-load work and brake dissipation (J); the battery's E
+// and v_rc (V); fuel (kg); the plant's energy integrals (J): engine work, battery terminal
+// energy out, gen losses, mot losses, battery losses.
 // Energy audit: fuel chemical energy + battery stored-energy decrease = road work + engine
 // losses (fuel energy - engine work) + gen, mot and battery losses + brake
 // + change of kinetic energy (1/2 w' M w: vehicle and every rotating part) + m g dh.
@@ -45,6 +46,7 @@
 #include "plant/prop_driver.hpp"
 #include "msgs/psd.hpp"
 #include "plant/road_load.hpp"
+#include "plant/vehicle_body.hpp"
 #include "plant/signals.hpp"
 
 namespace ehpt::plant {
@@ -65,11 +67,18 @@ void validate(const PsdParams& p, Problems& problems);
 
 class PsdPlant {
  public:
-  static constexpr int kIceSpeed = 0, kRingSpeed = 1, kDistance = 2, kEmf = 3, kVrc = 4, kFuelKg = 5,
-                       kAltitude = 6;
-  static constexpr int kIceWorkJ = 7, kBatteryOutJ = 8, kRoadJ = 9, kGenLossJ = 10, kMotLossJ = 11,
-                       kBatteryLossJ = 12, kBrakeJ = 13;
-  static constexpr int kNumStates = 14;
+  // the state, composed: [w_c w_r | VehicleBody | BatteryRc | fuel | energy integrals]
+  static constexpr int kIceSpeed = 0, kRingSpeed = 1;
+  static constexpr int kBodyAt = 2;
+  static constexpr int kBatteryAt = kBodyAt + VehicleBody::kNumStates;
+  static constexpr int kFuelKg = kBatteryAt + BatteryRc::kNumStates;
+  static constexpr int kIntegralsAt = kFuelKg + 1;
+  static constexpr int kNumStates = kIntegralsAt + 5;
+  static constexpr int kDistance = kBodyAt + VehicleBody::kDistance, kAltitude = kBodyAt + VehicleBody::kAltitude;
+  static constexpr int kRoadJ = kBodyAt + VehicleBody::kRoadJ, kBrakeJ = kBodyAt + VehicleBody::kBrakeJ;
+  static constexpr int kEmf = kBatteryAt + BatteryRc::kEmf, kVrc = kBatteryAt + BatteryRc::kVrc;
+  static constexpr int kIceWorkJ = kIntegralsAt, kBatteryOutJ = kIntegralsAt + 1, kGenLossJ = kIntegralsAt + 2,
+                       kMotLossJ = kIntegralsAt + 3, kBatteryLossJ = kIntegralsAt + 4;
   static constexpr int kNumCrossings = 1;
   using State = Eigen::Matrix<double, kNumStates, 1>;
   struct Modes {
@@ -125,28 +134,17 @@ class PsdPlant {
 
  private:
   double kinetic_energy_J(const State& x) const;
-  // Road load, grade and brake forces on the moving vehicle, signed against +v (0 when stuck).
-  static double resisting_force_N(Motion motion, double rolling_N, double speed_force_N, double grade_force_N,
-                                  double brake_N) {
-    switch (motion) {
-      case Motion::kForward: return rolling_N + speed_force_N + grade_force_N + brake_N;
-      case Motion::kBackward: return -rolling_N + speed_force_N + grade_force_N - brake_N;
-      case Motion::kStuck: break;
-    }
-    return 0.0;
-  }
   void sense_from(const Eval& e, const State& x, const Modes& m, Sensors& s) const;
 
   PsdParams p_;
   MapIce ice_;
   MapDrive gen_, mot_;
   BatteryRc battery_;
-  RoadLoad road_;
+  VehicleBody body_;
   double rho_ = 0.0;
   double g_over_r_ = 0.0, r_over_g_ = 0.0;
   double m11_ = 0, m12_ = 0, m22_ = 0;             // mass matrix (symmetric)
   double i11_ = 0, i12_ = 0, i22_ = 0;             // its inverse
-  double brake_gain_ = 0.0;
 };
 
 // Everything one evaluation computes (public so tests can check the planetary balances).
