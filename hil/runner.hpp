@@ -11,6 +11,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <type_traits>
 #include <vector>
@@ -81,8 +82,9 @@ class Runner {
   Runner(const Plant& plant, double h_s, std::int64_t total_steps, std::int64_t decimation,
          const std::vector<int>& columns, std::int64_t chunk_steps, Controller* controller = nullptr,
          std::int64_t controller_ratio = 1, std::int64_t latency_steps = 0, Pacer* pacer = nullptr,
-         FaultPolicy fault_policy = FaultPolicy::kStop)
+         FaultPolicy fault_policy = FaultPolicy::kStop, bool external_ecu = false)
       : plant_(plant),
+        external_ecu_(external_ecu),
         controller_(controller),
         pacer_(pacer),
         fault_policy_(fault_policy),
@@ -101,14 +103,24 @@ class Runner {
     m_ = plant.initial_modes(x_);
     if (pacer_ != nullptr) pacer_->wait_for_step(0);
     tick_controller(0);
-    observe(0);
+    if (external_ecu_) {
+      awaiting_command_ = true;  // the caller reads the sensors at t_0 and writes a command first
+    } else {
+      observe(0);
+    }
   }
 
-  // Run phase: advances up to chunk_steps (no allocation, no I/O). Returns steps taken.
-  // stop: a flag (e.g. the number of a signal) that ends the run when non-zero.
-  std::int64_t run(const std::atomic<int>* stop = nullptr) {
-    const std::int64_t end = std::min(total_steps_, n_ + chunk_steps_);
+  // Run phase: advances up to chunk_steps, or max_steps if fewer (no allocation, no I/O).
+  // Returns steps taken. stop: a flag (e.g. the number of a signal) that ends the run when
+  // non-zero.
+  std::int64_t run(const std::atomic<int>* stop = nullptr,
+                   std::int64_t max_steps = std::numeric_limits<std::int64_t>::max()) {
+    const std::int64_t end = std::min(total_steps_, n_ + std::min(chunk_steps_, max_steps));
     const std::int64_t start = n_;
+    if (awaiting_command_) {  // the external ECU's command for this sample is in: the outputs at t_n
+      awaiting_command_ = false;
+      observe(n_);
+    }
     while (n_ < end && !stopped_by_fault()) {
       if (stop != nullptr && stop->load(std::memory_order_relaxed) != 0) {
         recorder_.record(n_, y_);  // an interrupted run still ends with the state it reached
@@ -122,6 +134,12 @@ class Runner {
       ++n_;
       if (pacer_ != nullptr) pacer_->wait_for_step(n_);
       tick_controller(n_);
+      if (external_ecu_ && n_ % controller_ratio_ == 0) {
+        // an ECU sample: back to the caller, who reads the sensors at t_n and writes the
+        // command; the outputs at t_n follow with it (as the built-in ECU's do)
+        awaiting_command_ = true;
+        break;
+      }
       observe(n_);
     }
     stats_.steps_done = n_;
@@ -129,7 +147,20 @@ class Runner {
     return n_ - start;
   }
 
-  bool finished() const { return n_ >= total_steps_ || stopped_by_fault(); }
+  // For an ECU outside the runner (external_ecu: a bus, a Python callback, a test): run()
+  // stops at each ECU sample step; the caller reads the sensor message there (stamped like the
+  // built-in ECU's) and writes the command, which acts from that step on; the next run()
+  // takes the outputs at that step and goes on. The same discrete-time system, bit for bit.
+  template <class S>
+    requires std::is_same_v<S, typename SensorsOf<Plant>::type>
+  void sense(S& sensors) {
+    sensors.stamp = msgs::Stamp{stepper_.time_s(n_), n_, sensor_sequence_++};
+    plant_.sense(sensors.stamp.time_s, x_, m_, inputs_, sensors);
+  }
+  void set_command(const Inputs& command) { inputs_ = command; }
+  const Inputs& command() const { return inputs_; }
+
+  bool finished() const { return (n_ >= total_steps_ && !awaiting_command_) || stopped_by_fault(); }
   std::int64_t step_index() const { return n_; }
   std::int64_t total_steps() const { return total_steps_; }
   double time_s() const { return stepper_.time_s(n_); }
@@ -189,6 +220,8 @@ class Runner {
   }
 
   const Plant& plant_;
+  bool external_ecu_ = false;      // the caller is the ECU: it is asked at every sample step
+  bool awaiting_command_ = false;  // stopped at a sample step, the outputs there not yet taken
   Controller* controller_;
   Pacer* pacer_;
   FaultPolicy fault_policy_;

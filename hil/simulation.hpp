@@ -15,6 +15,8 @@
 #include "hil/config.hpp"
 #include "hil/metrics.hpp"
 #include "hil/runner.hpp"
+#include "msgs/ev.hpp"
+#include "msgs/psd.hpp"
 #include "plant/signals.hpp"
 
 namespace ehpt::hil {
@@ -28,6 +30,9 @@ struct SimulationOptions {
   std::vector<int> columns;              // indices into signals() to record; empty: all
   std::int64_t chunk_steps = 50000;      // most steps one run() takes; sizes the row buffer
   FaultPolicy fault_policy = FaultPolicy::kStop;
+  // true: no built-in ECU; the caller reads the sensors and writes the commands between
+  // steps (read_sensors, write_command), as an external ECU does
+  bool external_ecu = false;
 };
 
 // The figures of a run that exist only for some vehicles (nullopt where there is none).
@@ -53,6 +58,17 @@ class Simulation {
   virtual std::span<const double> rows() const = 0;
   virtual void clear_rows() = 0;
 
+  // Exactly n steps (n at most chunk_steps), e.g. one ECU period of an external ECU.
+  virtual std::int64_t step(std::int64_t n) = 0;
+  // Every signal's value now, in signals() order (into a buffer sized at start-up).
+  virtual std::span<const double> outputs() = 0;
+  // The messages, for an ECU outside (false: the vehicle is not of that family). Sensors are
+  // sampled now and stamped; a command acts from the current step on.
+  virtual bool read_sensors(msgs::EvSensors&) { return false; }
+  virtual bool read_sensors(msgs::PsdSensors&) { return false; }
+  virtual bool write_command(const msgs::EvCommand&) { return false; }
+  virtual bool write_command(const msgs::PsdCommand&) { return false; }
+
   virtual const RunStats& stats() const = 0;
   virtual const MetricTotals& metrics() const = 0;
   virtual plant::EnergyAudit audit() const = 0;  // end of run; allocates
@@ -61,6 +77,10 @@ class Simulation {
 
 // The simulation of a loaded scenario, built by its vehicle kind's factory.
 std::unique_ptr<Simulation> make_simulation(const Scenario& sc, const SimulationOptions& options);
+// Loads a scenario (a path or a name, with --set style overrides) and builds its simulation;
+// nullptr and every problem in errors if it cannot.
+std::unique_ptr<Simulation> load_simulation(const std::string& scenario, const std::vector<std::string>& overrides,
+                                            const SimulationOptions& options, std::vector<std::string>& errors);
 // The output signals of the scenario's vehicle (ehpt signals, column choice).
 std::vector<SignalInfo> scenario_signals(const Scenario& sc);
 

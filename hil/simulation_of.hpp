@@ -25,9 +25,11 @@ class SimulationOf final : public Simulation {
       for (std::size_t i = 0; i < signals_.size(); ++i) columns.push_back(static_cast<int>(i));
     }
     runner_ = std::make_unique<R>(*plant_, sc.solver.step_s, sc.solver.steps, sc.output.decimation, columns,
-                                  opt.chunk_steps, controller_.get(), sc.solver.ecu_ratio,
-                                  sc.solver.ecu_latency_steps, nullptr, opt.fault_policy);
+                                  opt.chunk_steps, opt.external_ecu ? nullptr : controller_.get(),
+                                  sc.solver.ecu_ratio, sc.solver.ecu_latency_steps, nullptr, opt.fault_policy,
+                                  opt.external_ecu);
     y0_ = runner_->last_outputs();
+    values_.resize(signals_.size());
   }
 
   std::span<const SignalInfo> signals() const override { return signals_; }
@@ -38,6 +40,17 @@ class SimulationOf final : public Simulation {
   double time_s() const override { return runner_->time_s(); }
   std::span<const double> rows() const override { return runner_->rows(); }
   void clear_rows() override { runner_->clear_rows(); }
+  std::int64_t step(std::int64_t n) override { return runner_->run(nullptr, n); }
+  std::span<const double> outputs() override {
+    const auto& y = runner_->last_outputs();
+    for (std::size_t i = 0; i < values_.size(); ++i) values_[i] = y.*(plant_->signals()[i].member);
+    return values_;
+  }
+  bool read_sensors(msgs::EvSensors& s) override { return sense_as(s); }
+  bool read_sensors(msgs::PsdSensors& s) override { return sense_as(s); }
+  bool write_command(const msgs::EvCommand& c) override { return command_as(c); }
+  bool write_command(const msgs::PsdCommand& c) override { return command_as(c); }
+
   const RunStats& stats() const override { return runner_->stats(); }
   const MetricTotals& metrics() const override { return runner_->metrics(); }
   plant::EnergyAudit audit() const override { return plant_->audit(runner_->initial_state(), runner_->state()); }
@@ -59,10 +72,28 @@ class SimulationOf final : public Simulation {
 
  private:
   using R = Runner<Plant, Integrator, Controller>;
+  template <class S>
+  bool sense_as(S& s) {
+    if constexpr (std::is_same_v<S, typename SensorsOf<Plant>::type>) {
+      runner_->sense(s);
+      return true;
+    }
+    return false;
+  }
+  template <class C>
+  bool command_as(const C& c) {
+    if constexpr (std::is_same_v<C, typename Plant::Inputs>) {
+      runner_->set_command(c);
+      return true;
+    }
+    return false;
+  }
+
   std::unique_ptr<const Plant> plant_;
   std::unique_ptr<Controller> controller_;
   double fuel_density_kg_m3_;
   std::vector<SignalInfo> signals_;
+  std::vector<double> values_;  // outputs(), sized at start-up
   std::unique_ptr<R> runner_;
   typename Plant::Outputs y0_{};
 };

@@ -6,6 +6,7 @@
 #include "ecu/ev_follower.hpp"
 #include "ecu/psd_ecu.hpp"
 #include "hil/config_components.hpp"
+#include "hil/scenario.hpp"
 #include "hil/simulation_of.hpp"
 #include "hil/vehicle_kinds.hpp"
 #include "plant/battery_rig.hpp"
@@ -327,6 +328,23 @@ const VehicleKind& kind_of(const Scenario& sc) {
 
 std::unique_ptr<Simulation> make_simulation(const Scenario& sc, const SimulationOptions& options) {
   return kind_of(sc).make(sc, options);
+}
+
+std::unique_ptr<Simulation> load_simulation(const std::string& scenario, const std::vector<std::string>& overrides,
+                                            const SimulationOptions& options, std::vector<std::string>& errors) {
+  std::string reason;
+  const std::string path = resolve_scenario(scenario, reason);
+  if (path.empty()) {
+    errors.push_back(scenario + ": " + reason);
+    return nullptr;
+  }
+  Scenario sc;
+  std::vector<std::string> problems;
+  if (!load_scenario(path, overrides, sc, problems)) {
+    errors.insert(errors.end(), problems.begin(), problems.end());
+    return nullptr;
+  }
+  return make_simulation(sc, options);
 }
 
 std::vector<SignalInfo> scenario_signals(const Scenario& sc) { return kind_of(sc).signals(sc); }
