@@ -1,0 +1,61 @@
+// bev: the map-based EV (MODELS.md §10.3) with its built-in ECU, the driver-follower.
+#include "hil/kinds/kind.hpp"
+
+#include "ecu/ev_follower.hpp"
+#include "plant/bev_plant.hpp"
+
+namespace ehpt::hil::kinds {
+
+namespace {
+
+// The EV's built-in ECU: the driver-follower; an optional [ecu] table sets its timing.
+void read_ev_ecu(Reader r, EcuTiming& timing, Context& ctx) {
+  const std::string kind = r.text("kind", "follower");
+  if (kind != "follower") {
+    ctx.error(ctx.where[r.field("kind")], r.field("kind"), "\"" + kind + "\"",
+              "must be \"follower\" (the built-in ECU of the EV; an external one joins over a bus)");
+  }
+  read_ecu_timing(r, timing);
+  r.finish();
+}
+
+plant::BevParams read_bev(Reader& root, const FileRef& cycle, bool periodic, Context& ctx) {
+  plant::BevParams p;
+  p.body = read_body(root.sub("vehicle"));
+  p.road = read_road(root.sub("road"), ctx);
+  p.drive = read_drive(root.sub("drive"), ctx);
+  p.battery = read_battery(root.sub("battery"));
+  p.driver = read_driver(root.sub("driver"));
+  p.brake = read_brake(root.sub("brake"));
+  if (!cycle.empty()) p.driver.cycle_m_s = load_cycle(cycle, "driver.cycle", periodic, ctx);
+  return p;
+}
+
+KindRead read_bev_kind(Reader& vr, const KindInput& in, Scenario& out, Problems& problems, Problems& warnings,
+                       Context& ctx) {
+  need_cycle(in, ctx);
+  plant::BevParams p = read_bev(vr, in.cycle, in.cycle_periodic, ctx);
+  read_ev_ecu(vr.sub("ecu"), out.ecu_timing, ctx);
+  vr.finish();
+  out.ecu = ecu::EvFollowerParams{};
+  plant::validate(p, problems);
+  if (problems.empty()) plant::warn(p.drive, "drive", warnings);
+  check_signals(plant::BevPlant::kSignals, out.output.signals, ctx);
+  KindRead r{cycle_length(p.driver), false, true};
+  out.plant = std::move(p);
+  return r;
+}
+
+}  // namespace
+
+// bev: the map-based EV with its driver-follower ECU
+extern const VehicleKind kBev{
+    "bev", read_bev_kind,
+    [](const Scenario& sc, const SimulationOptions& opt) {
+      return simulate(sc, opt, std::make_unique<const plant::BevPlant>(std::get<plant::BevParams>(sc.plant)),
+                      std::make_unique<ecu::EvFollower>());
+    },
+    [](const Scenario& sc) { return signals_of(plant::BevPlant(std::get<plant::BevParams>(sc.plant))); }};
+
+
+}  // namespace ehpt::hil::kinds

@@ -1,0 +1,67 @@
+// drive_rig: TestMBOneFlange / TestTwoFlange (MODELS.md §11.1, §11.3).
+#include "hil/kinds/kind.hpp"
+
+#include "plant/drive_rigs.hpp"
+
+namespace ehpt::hil::kinds {
+
+namespace {
+
+plant::DriveRigParams read_rig(Reader& root, Context& ctx) {
+  plant::DriveRigParams p;
+  const std::int64_t flanges = root.integer("flanges", 1);
+  if (flanges != 1 && flanges != 2) {
+    ctx.error(ctx.where["flanges"], "flanges", std::to_string(flanges), "must be 1 or 2");
+  }
+  p.two_flange = flanges == 2;
+  p.dc_voltage_V = root.number("dc_voltage_V", p.dc_voltage_V);
+  p.drive = read_drive(root.sub("drive"), ctx);
+  {
+    Reader r = root.sub("load");
+    p.load_inertia_kgm2 = r.number("inertia_kgm2", p.load_inertia_kgm2);
+    p.speed_initial_rad_s = r.number("speed_initial_rad_s", p.speed_initial_rad_s);
+    p.load_torque_nominal_Nm = r.number("torque_nominal_Nm", p.load_torque_nominal_Nm);
+    p.load_speed_nominal_rad_s = r.number("speed_nominal_rad_s", p.load_speed_nominal_rad_s);
+    p.flange_a_torque_Nm = r.number("flange_a_torque_Nm", p.flange_a_torque_Nm);
+    r.finish();
+  }
+  {
+    Reader r = root.sub("request");
+    plant::Trapezoid& t = p.request_Nm;
+    t.offset = r.number("offset_Nm", 0.0);
+    t.amplitude = r.number("amplitude_Nm", 0.0);
+    t.start_s = r.number("start_s", 0.0);
+    t.rising_s = r.required_number("rising_s");
+    t.width_s = r.number("width_s", 0.0);
+    t.falling_s = r.required_number("falling_s");
+    t.period_s = r.number("period_s", 1e6);
+    r.finish();
+  }
+  return p;
+}
+
+KindRead read_drive_rig_kind(Reader& vr, const KindInput& in, Scenario& out, Problems& problems, Problems& warnings,
+                             Context& ctx) {
+  no_cycle(in, "a drive rig", ctx);
+  plant::DriveRigParams p = read_rig(vr, ctx);
+  vr.finish();
+  plant::validate(p, problems);
+  if (problems.empty()) plant::warn(p.drive, "drive", warnings);
+  check_signals(plant::DriveRig(p).signals(), out.output.signals, ctx);
+  out.plant = std::move(p);
+  return {};
+}
+
+}  // namespace
+
+// drive_rig: TestMBOneFlange / TestTwoFlange
+extern const VehicleKind kDriveRig{
+    "drive_rig", read_drive_rig_kind,
+    [](const Scenario& sc, const SimulationOptions& opt) {
+      return simulate(sc, opt, std::make_unique<const plant::DriveRig>(std::get<plant::DriveRigParams>(sc.plant)),
+                      std::unique_ptr<NoController>());
+    },
+    [](const Scenario& sc) { return signals_of(plant::DriveRig(std::get<plant::DriveRigParams>(sc.plant))); }};
+
+
+}  // namespace ehpt::hil::kinds

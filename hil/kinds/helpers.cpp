@@ -1,0 +1,18 @@
+#include "hil/kinds/kind.hpp"
+
+namespace ehpt::hil::kinds {
+
+void need_cycle(const KindInput& in, Context& ctx) {
+  if (in.cycle.empty()) ctx.error(in.scenario_path, "cycle", "", "missing (a vehicle with a driver needs a cycle file)");
+}
+void no_cycle(const KindInput& in, const char* what, Context& ctx) {
+  if (!in.cycle.empty()) {
+    ctx.error(in.cycle.where, "cycle", "\"" + in.cycle.written + "\"", std::string(what) + " has no driver: remove the cycle");
+  }
+}
+std::optional<double> cycle_length(const plant::PropDriverParams& d) {
+  if (d.cycle_m_s.empty()) return std::nullopt;
+  return d.cycle_m_s.x().back();
+}
+
+}  // namespace ehpt::hil::kinds

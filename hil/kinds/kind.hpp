@@ -1,0 +1,54 @@
+#pragma once
+// What a vehicle kind is made of (start-up only): its entry in the table of hil/vehicles.cpp
+// {name, reader, factory, signals}, and the helpers the kinds share. One file per kind in
+// hil/kinds/ defines its entry.
+
+#include <memory>
+#include <optional>
+#include <string_view>
+#include <vector>
+
+#include "hil/config_components.hpp"
+#include "hil/simulation_of.hpp"
+#include "hil/vehicle_kinds.hpp"
+#include "solvers/integrators.hpp"
+
+namespace ehpt::hil::kinds {
+
+using namespace detail;
+
+struct VehicleKind {
+  std::string_view name;  // `kind` in the vehicle file
+  ReadKind read;
+  std::unique_ptr<Simulation> (*make)(const Scenario&, const SimulationOptions&);
+  std::vector<SignalInfo> (*signals)(const Scenario&);
+};
+
+extern const VehicleKind kBev, kPsd, kDriveRig, kBatteryRig;
+
+// One kind: its plant (and ECU) from the scenario, with the scenario's solver.
+template <class Plant, class Controller = NoController>
+inline std::unique_ptr<Simulation> simulate(const Scenario& sc, const SimulationOptions& opt,
+                                     std::unique_ptr<const Plant> plant, std::unique_ptr<Controller> controller,
+                                     double fuel_density_kg_m3 = 0.0) {
+  if (sc.solver.kind == SolverKind::kRk4) {
+    return std::make_unique<SimulationOf<Plant, solvers::Rk4<Plant>, Controller>>(
+        sc, opt, std::move(plant), std::move(controller), fuel_density_kg_m3);
+  }
+  return std::make_unique<SimulationOf<Plant, solvers::ImplicitEuler<Plant>, Controller>>(
+      sc, opt, std::move(plant), std::move(controller), fuel_density_kg_m3);
+}
+
+template <class Plant>
+inline std::vector<SignalInfo> signals_of(const Plant& plant) {
+  std::vector<SignalInfo> out;
+  for (const auto& s : plant.signals()) out.push_back({s.name, s.meaning});
+  return out;
+}
+
+// A vehicle with a driver needs a cycle; a rig has none.
+void need_cycle(const KindInput& in, Context& ctx);
+void no_cycle(const KindInput& in, const char* what, Context& ctx);
+std::optional<double> cycle_length(const plant::PropDriverParams& d);
+
+}  // namespace ehpt::hil::kinds
