@@ -126,7 +126,11 @@ class Runner {
         recorder_.record(n_, y_);  // an interrupted run still ends with the state it reached
         break;
       }
-      const solvers::StepReport r = stepper_.advance(n_, x_, m_, inputs_);
+      // dx/dt at t_n came with the outputs at t_n when nothing has moved since (same x, modes,
+      // inputs): the integrator's first stage, one evaluation saved, the same result
+      const solvers::StepReport r =
+          stepper_.advance(n_, x_, m_, inputs_, dx_observed_step_ == n_ ? &dx_observed_ : nullptr);
+      dx_observed_step_ = -1;
       stats_.events += r.events;
       stats_.chattering_steps += r.chattering ? 1 : 0;
       stats_.newton_failures += r.converged ? 0 : 1;
@@ -157,7 +161,10 @@ class Runner {
     sensors.stamp = msgs::Stamp{stepper_.time_s(n_), n_, sensor_sequence_++};
     plant_.sense(sensors.stamp.time_s, x_, m_, inputs_, sensors);
   }
-  void set_command(const Inputs& command) { inputs_ = command; }
+  void set_command(const Inputs& command) {
+    inputs_ = command;
+    dx_observed_step_ = -1;  // taken with the old command
+  }
   const Inputs& command() const { return inputs_; }
 
   bool finished() const { return (n_ >= total_steps_ && !awaiting_command_) || stopped_by_fault(); }
@@ -207,7 +214,12 @@ class Runner {
   // Run phase: outputs at grid point n, metrics, the fault policy and the record.
   void observe(std::int64_t n) {
     const double t_s = stepper_.time_s(n);
-    plant_.outputs(t_s, x_, m_, inputs_, y_);
+    if constexpr (solvers::PlantWithOutputDerivatives<Plant>) {
+      plant_.outputs(t_s, x_, m_, inputs_, y_, dx_observed_);
+      dx_observed_step_ = n;
+    } else {
+      plant_.outputs(t_s, x_, m_, inputs_, y_);
+    }
     metrics_.observe(n, y_);
     const auto fault = static_cast<unsigned>(y_.fault);
     if (fault != 0 && stats_.fault == 0) {
@@ -244,6 +256,8 @@ class Runner {
   Inputs inputs_{};
   typename SensorsOf<Plant>::type sensors_{};
   Outputs y_{};
+  State dx_observed_;                   // dx/dt with the outputs at step dx_observed_step_
+  std::int64_t dx_observed_step_ = -1;  // -1: none that the next step may use
   RunStats stats_;
 };
 

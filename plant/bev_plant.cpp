@@ -150,8 +150,8 @@ BevPlant::AtRest BevPlant::at_rest(const State& x, const Inputs& u) const {
   return {torque_Nm * g_over_r_ - body_.road().grade_force_N(grade_rad), body_.road().rolling_N(grade_rad) + brake_N};
 }
 
-void BevPlant::derivatives(double, const State& x, const Modes& m, const Inputs& u, State& dx) const {
-  const Eval e = evaluate(x, m, u);
+// Inlined into derivatives() (the RK4 stages) and outputs(): one evaluation, no copy of it.
+[[gnu::always_inline]] inline void BevPlant::derivatives_from(const Eval& e, const State& x, State& dx) const {
   const double v = x[kSpeed];
   dx[kSpeed] = e.accel_m_s2;
   body_.derivatives(v, {e.grade_rad, e.rolling_N, e.speed_force_N, 0.0}, e.brake_N, dx.data() + kBodyAt);
@@ -161,6 +161,10 @@ void BevPlant::derivatives(double, const State& x, const Modes& m, const Inputs&
   dx[kBatteryOutJ] = e.battery.voltage_V * e.battery.current_A;
   dx[kDriveLossJ] = e.drive.power_dc_W - e.drive.power_mech_W;
   dx[kBatteryLossJ] = e.battery.loss_W;
+}
+
+void BevPlant::derivatives(double, const State& x, const Modes& m, const Inputs& u, State& dx) const {
+  derivatives_from(evaluate(x, m, u), x, dx);
 }
 
 void BevPlant::crossings(double, const State& x, const Modes& m, const Inputs& u, double* z) const {
@@ -195,8 +199,8 @@ void BevPlant::sense(double t_s, const State& x, const Modes& m, const Inputs& u
   s.locked = m.motion == Motion::kStuck;
 }
 
-void BevPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const {
-  const Eval e = evaluate(x, m, u);
+[[gnu::always_inline]] inline void BevPlant::outputs_from(const Eval& e, double t_s, const State& x, const Modes& m, const Inputs& u,
+                            Outputs& y) const {
   const DriverOutput driver = drive(p_.driver, t_s, x[kSpeed]);
   y.time_s = t_s;
   y.speed_ref_m_s = driver.speed_ref_m_s;
@@ -229,6 +233,16 @@ void BevPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs&
   y.drive_loss_J = x[kDriveLossJ];
   y.battery_loss_J = x[kBatteryLossJ];
   y.brake_work_J = x[kBrakeJ];
+}
+
+void BevPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const {
+  outputs_from(evaluate(x, m, u), t_s, x, m, u, y);
+}
+
+void BevPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx) const {
+  const Eval e = evaluate(x, m, u);
+  outputs_from(e, t_s, x, m, u, y);
+  derivatives_from(e, x, dx);
 }
 
 EnergyAudit BevPlant::audit(const State& x0, const State& x) const {

@@ -102,6 +102,9 @@ class BevPlant {
   void crossings(double t_s, const State& x, const Modes& m, const Inputs& u, double* z) const;
   void on_crossing(int index, double t_s, State& x, Modes& m, const Inputs& u) const;
   void outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const;
+  // The outputs and dx/dt from one evaluation: the runner hands dx/dt to the integrator as the
+  // first stage of the next step (same t, x, modes, inputs), which saves one evaluation.
+  void outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx) const;
   // What the ECU reads at t_s (the stamp is the runner's).
   void sense(double t_s, const State& x, const Modes& m, const Inputs& u, Sensors& s) const;
 
@@ -115,6 +118,8 @@ class BevPlant {
  private:
   struct Eval;  // everything one evaluation computes (the driver is not needed for it)
   Eval evaluate(const State& x, const Modes& m, const Inputs& u) const;
+  void derivatives_from(const Eval& e, const State& x, State& dx) const;
+  void outputs_from(const Eval& e, double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const;
   // At rest (v = 0): the force the road must hold, and the break-away threshold. A lean
   // version of evaluate() for the stuck-mode crossing, which runs twice per step.
   struct AtRest {

@@ -140,8 +140,8 @@ PsdPlant::Eval PsdPlant::evaluate(double t_s, const State& x, const Modes& m, co
   return e;
 }
 
-void PsdPlant::derivatives(double t_s, const State& x, const Modes& m, const Inputs& u, State& dx) const {
-  const Eval e = evaluate(t_s, x, m, u);
+// Inlined into derivatives() (the RK4 stages) and outputs(): one evaluation, no copy of it.
+[[gnu::always_inline]] inline void PsdPlant::derivatives_from(const Eval& e, const State& x, State& dx) const {
   dx[kIceSpeed] = e.ice_accel_rad_s2;
   dx[kRingSpeed] = e.ring_accel_rad_s2;
   body_.derivatives(e.speed_m_s, {e.grade_rad, e.rolling_N, e.speed_force_N, e.grade_force_N}, e.brake_N,
@@ -154,6 +154,10 @@ void PsdPlant::derivatives(double t_s, const State& x, const Modes& m, const Inp
   dx[kGenLossJ] = e.gen.power_dc_W - e.gen.power_mech_W;
   dx[kMotLossJ] = e.mot.power_dc_W - e.mot.power_mech_W;
   dx[kBatteryLossJ] = e.battery.loss_W;
+}
+
+void PsdPlant::derivatives(double t_s, const State& x, const Modes& m, const Inputs& u, State& dx) const {
+  derivatives_from(evaluate(t_s, x, m, u), x, dx);
 }
 
 void PsdPlant::crossings(double t_s, const State& x, const Modes& m, const Inputs& u, double* z) const {
@@ -205,8 +209,8 @@ void PsdPlant::sense_from(const Eval& e, const State& x, const Modes& m, Sensors
   bus.locked = m.motion == Motion::kStuck;
 }
 
-void PsdPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const {
-  const Eval e = evaluate(t_s, x, m, u);
+[[gnu::always_inline]] inline void PsdPlant::outputs_from(const Eval& e, double t_s, const State& x, const Modes& m, const Inputs& u,
+                            Outputs& y) const {
   Sensors bus;
   sense_from(e, x, m, bus);
   y.time_s = t_s;
@@ -244,6 +248,16 @@ void PsdPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs&
   y.soc = bus.batSOC;
   y.locked = bus.locked ? 1.0 : 0.0;
   y.fault = bus.fault;
+}
+
+void PsdPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const {
+  outputs_from(evaluate(t_s, x, m, u), t_s, x, m, u, y);
+}
+
+void PsdPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx) const {
+  const Eval e = evaluate(t_s, x, m, u);
+  outputs_from(e, t_s, x, m, u, y);
+  derivatives_from(e, x, dx);
 }
 
 double PsdPlant::kinetic_energy_J(const State& x) const {

@@ -119,6 +119,9 @@ class PsdPlant {
   void crossings(double t_s, const State& x, const Modes& m, const Inputs& u, double* z) const;
   void on_crossing(int index, double t_s, State& x, Modes& m, const Inputs& u) const;
   void outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const;
+  // The outputs and dx/dt from one evaluation: the runner hands dx/dt to the integrator as the
+  // first stage of the next step (same t, x, modes, inputs), which saves one evaluation.
+  void outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx) const;
   // What the ECU reads at t_s (the stamp is the runner's).
   void sense(double t_s, const State& x, const Modes& m, const Inputs& u, Sensors& s) const;
 
@@ -135,6 +138,8 @@ class PsdPlant {
  private:
   double kinetic_energy_J(const State& x) const;
   void sense_from(const Eval& e, const State& x, const Modes& m, Sensors& s) const;
+  void derivatives_from(const Eval& e, const State& x, State& dx) const;
+  void outputs_from(const Eval& e, double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const;
 
   PsdParams p_;
   MapIce ice_;

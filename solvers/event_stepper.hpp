@@ -58,19 +58,21 @@ class EventStepper {
   double time_s(std::int64_t n) const { return t0_s_ + static_cast<double>(n) * h_s_; }
   double step_s() const { return h_s_; }
 
-  // Run phase: x, m at t_n -> t_{n+1}. No allocation.
-  StepReport advance(std::int64_t n, State& x, Modes& m, const Inputs& u) {
+  // Run phase: x, m at t_n -> t_{n+1}. No allocation. dx_start: dx/dt at (t_n, x, m, u) if
+  // the caller has it (the runner gets it with the outputs), else null.
+  StepReport advance(std::int64_t n, State& x, Modes& m, const Inputs& u, const State* dx_start = nullptr) {
     StepReport r;
     const double t_end = time_s(n + 1);
     double ta = time_s(n);
     if constexpr (kNumZ == 0) {
-      integrate(ta, t_end - ta, m, u, x, r);
+      integrate(ta, t_end - ta, m, u, x, r, dx_start);
       return r;
     } else {
+      const State* dx_a = dx_start;  // dx/dt at the segment start, until an event moves it
       for (;;) {
         // integrate the rest of the step in place, keeping its start for event location
         xa_ = x;
-        integrate(ta, t_end - ta, m, u, x, r);
+        integrate(ta, t_end - ta, m, u, x, r, dx_a);
         plant_.crossings(ta, xa_, m, u, za_.data());
         plant_.crossings(t_end, x, m, u, zb_.data());
         int fired = -1;
@@ -82,7 +84,7 @@ class EventStepper {
             break;
           }
           if (za_[i] > 0.0 && zb_[i] <= 0.0) {
-            const double at_s = locate(i, ta, t_end - ta, m, u, r);
+            const double at_s = locate(i, ta, t_end - ta, m, u, r, dx_a);
             if (fired < 0 || at_s < tau_s) {
               fired = i;
               tau_s = at_s;
@@ -96,9 +98,10 @@ class EventStepper {
         }
         // integrate to the event, switch the mode, and carry on with the rest of the step
         x = xa_;
-        if (tau_s > 0.0) integrate(ta, tau_s, m, u, x, r);
+        if (tau_s > 0.0) integrate(ta, tau_s, m, u, x, r, dx_a);
         ta += tau_s;
         plant_.on_crossing(fired, ta, x, m, u);
+        dx_a = nullptr;
         ++r.events;
         r.event_time_s = ta;
         if (!(ta < t_end)) return r;
@@ -107,14 +110,16 @@ class EventStepper {
   }
 
  private:
-  void integrate(double t_s, double h_s, const Modes& m, const Inputs& u, State& x, StepReport& r) {
-    const IntegratorStatus s = integ_.step(t_s, h_s, m, u, x);
+  void integrate(double t_s, double h_s, const Modes& m, const Inputs& u, State& x, StepReport& r,
+                 const State* dx_start) {
+    const IntegratorStatus s = integ_.step(t_s, h_s, m, u, x, dx_start);
     r.converged = r.converged && s.converged;
     r.iterations += s.iterations;
   }
 
   // Earliest time (from ta) at which z_i <= 0; returns the crossed end of the bracket.
-  double locate(int i, double ta, double span_s, const Modes& m, const Inputs& u, StepReport& r) {
+  double locate(int i, double ta, double span_s, const Modes& m, const Inputs& u, StepReport& r,
+                const State* dx_a) {
     double lo = 0.0, hi = span_s;
     double z_lo = za_[i], z_hi = zb_[i];
     int side = 0;  // Illinois: which end was kept last time
@@ -122,7 +127,7 @@ class EventStepper {
       double mid = (it % 3 == 2) ? 0.5 * (lo + hi) : lo + (hi - lo) * z_lo / (z_lo - z_hi);
       if (!(mid > lo && mid < hi)) mid = 0.5 * (lo + hi);
       xm_ = xa_;
-      integrate(ta, mid, m, u, xm_, r);
+      integrate(ta, mid, m, u, xm_, r, dx_a);
       plant_.crossings(ta + mid, xm_, m, u, zm_.data());
       const double z = zm_[i];
       if (z <= 0.0) {

@@ -30,11 +30,17 @@ class Rk4 {
 
   explicit Rk4(const Plant& plant) : plant_(plant) {}
 
-  // Run phase: x(t_s) -> x(t_s + h_s).
-  IntegratorStatus step(double t_s, double h_s, const Modes& m, const Inputs& u, State& x) {
+  // Run phase: x(t_s) -> x(t_s + h_s). dx_start: dx/dt at (t_s, x, m, u) if the caller has it
+  // (the first stage; the result is the same bit for bit), else null.
+  IntegratorStatus step(double t_s, double h_s, const Modes& m, const Inputs& u, State& x,
+                        const State* dx_start = nullptr) {
     const double half_s = 0.5 * h_s, sixth_s = h_s / 6.0;
     // plain loops over the fixed size: GCC does not inline Eigen's assignment loops here
-    plant_.derivatives(t_s, x, m, u, k1_);
+    if (dx_start != nullptr) {
+      k1_ = *dx_start;
+    } else {
+      plant_.derivatives(t_s, x, m, u, k1_);
+    }
     for (int i = 0; i < N; ++i) tmp_[i] = x[i] + half_s * k1_[i];
     plant_.derivatives(t_s + half_s, tmp_, m, u, k2_);
     for (int i = 0; i < N; ++i) tmp_[i] = x[i] + half_s * k2_[i];
@@ -66,8 +72,10 @@ class ImplicitEuler {
   explicit ImplicitEuler(const Plant& plant, int max_iterations = 20, double tolerance = 1e-10)
       : plant_(plant), max_iterations_(max_iterations), tolerance_(tolerance) {}
 
-  // Run phase: x(t_s) -> x(t_s + h_s).
-  IntegratorStatus step(double t_s, double h_s, const Modes& m, const Inputs& u, State& x) {
+  // Run phase: x(t_s) -> x(t_s + h_s). dx_start (dx/dt at the start) is not used: the
+  // implicit step evaluates at the end of the step.
+  IntegratorStatus step(double t_s, double h_s, const Modes& m, const Inputs& u, State& x,
+                        const State* /*dx_start*/ = nullptr) {
     const double t1_s = t_s + h_s;
     x0_ = x;
     // Jacobian of f at the start point, by forward differences

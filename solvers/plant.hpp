@@ -49,6 +49,16 @@ concept RunnablePlant = Plant<P> && requires(const P& plant, double t_s, const t
   P::kMetrics;
 };
 
+// Optional: outputs(t, x, modes, inputs, y, dx) fills the outputs and dx/dt from one
+// evaluation; the runner then gives dx/dt to the next step as its first stage (the same t, x,
+// modes and inputs), saving one evaluation per step with bit-identical results.
+template <class P>
+concept PlantWithOutputDerivatives =
+    RunnablePlant<P> && requires(const P& plant, double t_s, const typename P::State& x, const typename P::Modes& m,
+                                 const typename P::Inputs& u, typename P::Outputs& y, typename P::State& dx) {
+      plant.outputs(t_s, x, m, u, y, dx);
+    };
+
 template <class P>
 concept PlantWithSensors = RunnablePlant<P> && requires(const P& plant, double t_s, const typename P::State& x,
                                                 const typename P::Modes& m, const typename P::Inputs& u,
