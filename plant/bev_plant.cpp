@@ -199,8 +199,8 @@ void BevPlant::sense(double t_s, const State& x, const Modes& m, const Inputs& u
   s.locked = m.motion == Motion::kStuck;
 }
 
-[[gnu::always_inline]] inline void BevPlant::outputs_from(const Eval& e, double t_s, const State& x, const Modes& m, const Inputs& u,
-                            Outputs& y) const {
+[[gnu::always_inline]] inline void BevPlant::outputs_from(const Eval& e, double t_s, const State& x,
+                                                          const Modes& m, const Inputs& u, Outputs& y) const {
   const DriverOutput driver = drive(p_.driver, t_s, x[kSpeed]);
   y.time_s = t_s;
   y.speed_ref_m_s = driver.speed_ref_m_s;

@@ -209,8 +209,8 @@ void PsdPlant::sense_from(const Eval& e, const State& x, const Modes& m, Sensors
   bus.locked = m.motion == Motion::kStuck;
 }
 
-[[gnu::always_inline]] inline void PsdPlant::outputs_from(const Eval& e, double t_s, const State& x, const Modes& m, const Inputs& u,
-                            Outputs& y) const {
+[[gnu::always_inline]] inline void PsdPlant::outputs_from(const Eval& e, double t_s, const State& x,
+                                                          const Modes& m, const Inputs& u, Outputs& y) const {
   Sensors bus;
   sense_from(e, x, m, bus);
   y.time_s = t_s;
