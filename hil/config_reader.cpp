@@ -1,5 +1,6 @@
 #include "hil/config_reader.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <sstream>
 
@@ -73,6 +74,13 @@ bool parse_override(const std::string& text, toml::table& out, Context& ctx) {
   const auto eq = text.find('=');
   if (eq == std::string::npos || eq == 0) {
     ctx.errors.push_back("--set " + text + ": expected key=value, e.g. --set vehicle.battery.soc_initial=0.6");
+    return false;
+  }
+  // One --set is one key: a line break would let TOML read further keys past the layering
+  // and the last-one-wins rule (and would put the break into the message)
+  if (const auto br = text.find_first_of("\r\n"); br != std::string::npos) {
+    ctx.errors.push_back("--set " + text.substr(0, std::min<std::size_t>(br, 80)) +
+                         "...: one key=value per --set; the text holds a line break");
     return false;
   }
   const std::string key = text.substr(0, eq);

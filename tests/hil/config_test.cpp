@@ -165,6 +165,16 @@ TEST(Config, TheLastSetOfAKeyWins) {
   EXPECT_EQ(sc.solver.step_s, 0.0005);
 }
 
+TEST(Config, OneSetIsOneKeyALineBreakIsRefused) {
+  Scenario sc;
+  const auto errors = problems_with({"solver.duration_s=10\nsolver.step_s=0.5"}, sc);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_EQ(errors[0], "--set solver.duration_s=10...: one key=value per --set; the text holds a line break");
+  EXPECT_EQ(problems_with({"vehicle.name=a\r"}, sc).size(), 1u);
+  ASSERT_TRUE(problems_with({"solver.duration_s=10"}, sc).empty());
+  EXPECT_EQ(sc.solver.duration_s, 10.0);
+}
+
 TEST(Config, ACoastingCarHasGainZero) {
   Scenario sc;
   ASSERT_TRUE(problems_with({"vehicle.driver.gain=0"}, sc).empty());
