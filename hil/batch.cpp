@@ -67,7 +67,11 @@ Streamed stream(Simulation& sim, const Scenario& sc, std::string text, std::size
   const auto wall_start = std::chrono::steady_clock::now();
   for (;;) {
     const auto t0 = std::chrono::steady_clock::now();
-    sim.run(opt.stop_signal);
+    if (opt.driver != nullptr) {
+      opt.driver->advance(sim, kChunkSteps, opt.stop_signal);
+    } else {
+      sim.run(opt.stop_signal);
+    }
     out.run_wall_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const auto rows = sim.rows();
     for (std::size_t i = 0; i < rows.size(); ++i) {
@@ -76,6 +80,7 @@ Streamed stream(Simulation& sim, const Scenario& sc, std::string text, std::size
     }
     sim.clear_rows();
     if (out.csv_error.empty()) csv.write(text, out.csv_error);
+    if (out.csv_error.empty() && opt.driver != nullptr) opt.driver->flush(out.csv_error);
     text.clear();
     if (opt.progress) {
       char buf[96];
@@ -105,12 +110,14 @@ struct Report {
   Streamed run;
   double sim_s = 0.0, distance_m = 0.0, relative = 0.0, fuel_g = 0.0, fuel_L_per_100km = 0.0;
   bool audit_closes = true;
+  std::int64_t codec_saturations = 0;
   std::string status = "ok";
 };
 
 Report report_of(const Simulation& sim, Streamed run) {
   Report r{sim.stats(), sim.metrics(), sim.figures(), sim.audit(), std::move(run)};
   r.sim_s = sim.time_s();
+  r.codec_saturations = sim.ecu_codec_saturations();
   r.distance_m = r.fig.distance_m.value_or(0.0);
   r.relative = std::abs(r.audit.residual_J) / std::max(r.audit.scale_J, 1.0);
   r.audit_closes = r.relative <= kAuditWarnRelative;
@@ -164,6 +171,7 @@ io::JsonObject summary_json(const Scenario& sc, const Report& r, const std::vect
   j.integer("newton_iterations", st.newton_iterations);
   j.integer("output_decimation", sc.output.decimation);
   j.integer("rows_dropped", st.rows_dropped);
+  if (sc.ecu_codec == EcuCodec::kCan) j.integer("ecu_codec_saturated_signals", r.codec_saturations);
   j.number("distance_m", r.distance_m);
   if (mt.has_speed) {
     j.number("speed_error_rms_kmh", mt.speed_error_rms_kmh());
@@ -271,7 +279,8 @@ BatchResult run_batch(const Scenario& sc, const BatchOptions& opt, std::ostream&
   io::OutputDir dir;
   io::TextFileWriter csv;
   std::string error;
-  if (!dir.open(opt.out_dir, error) || !csv.open(dir.file("timeseries.csv"), error)) {
+  if (!dir.open(opt.out_dir, error) || !csv.open(dir.file("timeseries.csv"), error) ||
+      (opt.driver != nullptr && !opt.driver->open(dir, error))) {
     log << "error: " << error << "\n";
     res.exit_code = 1;
     return res;
@@ -282,7 +291,12 @@ BatchResult run_batch(const Scenario& sc, const BatchOptions& opt, std::ostream&
   }
   header += "\n";
 
-  const std::unique_ptr<Simulation> sim = make_simulation(sc, SimulationOptions{columns, kChunkSteps});
+  SimulationOptions sim_opt{columns, kChunkSteps};
+  if (opt.driver != nullptr) {
+    sim_opt.external_ecu = true;
+    sim_opt.fault_policy = FaultPolicy::kHold;
+  }
+  const std::unique_ptr<Simulation> sim = make_simulation(sc, sim_opt);
   const Report r = report_of(*sim, stream(*sim, sc, header, columns.size(), csv, opt, log));
   if (r.st.fault != 0) {
     res.exit_code = 3;
@@ -294,6 +308,7 @@ BatchResult run_batch(const Scenario& sc, const BatchOptions& opt, std::ostream&
   warnings.insert(warnings.end(), res.warnings.begin(), res.warnings.end());
   res.summary = summary_json(sc, r, warnings);
   res.summary_text = summary_text(sc, r);
+  if (opt.driver != nullptr) opt.driver->report(res.summary, res.summary_text);
 
   if (!r.run.csv_error.empty()) {
     log << "error: " << r.run.csv_error << " (the run's files are in " << dir.partial_dir() << ")\n";

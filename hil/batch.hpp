@@ -14,6 +14,25 @@
 
 namespace ehpt::hil {
 
+class Simulation;
+
+// A run whose ECU is outside (a bus target): the simulation is built without its built-in ECU
+// and holds on through faults (an HIL plant reports them on the bus); the driver steps it and
+// talks to the ECU. Between its calls the batch writes the recorded rows.
+class ExternalDriver {
+ public:
+  virtual ~ExternalDriver() = default;
+  // Start-up: the output folder is open; false and error if the driver's files cannot be made.
+  virtual bool open(const io::OutputDir& dir, std::string& error) = 0;
+  // Run phase: advances at most max_steps steps (the row buffer's size); may wait for the ECU
+  // or the wall clock; returns when done, stopped (stop != 0) or max_steps are taken.
+  virtual void advance(Simulation& sim, std::int64_t max_steps, const std::atomic<int>* stop) = 0;
+  // Between chunks and at the end: the driver's own files (bus.log); false and error on failure.
+  virtual bool flush(std::string& error) = 0;
+  // The end: its figures, into summary.json ("bus") and onto the terminal.
+  virtual void report(io::JsonObject& summary, std::string& text) const = 0;
+};
+
 struct BatchOptions {
   std::string out_dir;               // final folder (written as out_dir.partial-<pid> first)
   bool progress = false;             // "\r[ 42%] ..." on the log stream between chunks
@@ -23,6 +42,7 @@ struct BatchOptions {
   // committed (the plot tool draws there, so its figures are part of the run's manifest);
   // returns false on failure (the run is still committed, BatchResult::after_failed is set)
   std::function<bool(const std::string& dir)> before_commit;
+  ExternalDriver* driver = nullptr;  // null: the built-in ECU, as fast as possible
 };
 
 // A run whose energy audit does not close to this relative residual (0.1 %) is flagged.

@@ -165,15 +165,22 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
                "shorter than the step (" + io::number_text(h) + " s): every step is written");
     }
   }
-  if (has_ecu && step_ok) {
+  if (has_ecu && step_ok && out.solver.steps > 0) {
     // the ECU runs every whole number of plant steps (0: every step), and its commands act a
     // whole number of steps after the sample they were computed from (0: at once)
     const auto whole_steps = [&](double value_s, const char* field, std::int64_t& steps) {
       const double ratio = value_s / h;
       steps = ratio >= 0.0 && ratio < 1e9 ? std::llround(ratio) : -1;
       if (steps < 0 || std::abs(ratio - static_cast<double>(steps)) > 1e-9 * std::max(1.0, ratio)) {
-        ctx.error(ctx.where[field], field, io::number_text(value_s),
-                  "must be a whole multiple of solver.step_s = " + io::number_text(h) + " (and >= 0)");
+        const auto at = ctx.where.find(field);
+        if (at == ctx.where.end()) {  // not written anywhere: the default period
+          ctx.error(ctx.where["solver.step_s"], field, io::number_text(value_s),
+                    "the default ECU period (the bus cycle time) is not a whole multiple of solver.step_s = " +
+                        io::number_text(h) + "; set vehicle.ecu.period_s to one (0: every step)");
+        } else {
+          ctx.error(at->second, field, io::number_text(value_s),
+                    "must be a whole multiple of solver.step_s = " + io::number_text(h) + " (and >= 0)");
+        }
       }
     };
     EcuTiming& t = out.ecu_timing;
@@ -183,6 +190,11 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
       ctx.error(ctx.where["ecu.period_s"], "ecu.period_s", io::number_text(t.period_s), "must be > 0 (0: every step)");
     }
     whole_steps(t.latency_s, "ecu.latency_s", out.solver.ecu_latency_steps);
+    if (t.codec == "can") {
+      out.ecu_codec = EcuCodec::kCan;
+    } else if (t.codec != "none") {
+      ctx.error(ctx.where["ecu.codec"], "ecu.codec", "\"" + t.codec + "\"", "must be \"none\" or \"can\"");
+    }
     if (auto* e = std::get_if<ecu::PsdEcuParams>(&out.ecu)) e->period_s = t.period_s;
   }
   for (std::string& w : ctx.warnings) out.warnings.push_back(std::move(w));

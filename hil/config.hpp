@@ -41,11 +41,17 @@ struct OutputSettings {
   std::int64_t decimation = 100;     // write every n-th step (row 0 and the last step always)
 };
 
-// [ecu] period_s (0: every plant step) and latency_s (0: a command acts from the sample it
-// was computed from), both whole multiples of solver.step_s.
+// [ecu] period_s (default 0.01 s, the bus contract's cycle time, GenMsgCycleTime in
+// io/can/ehpt.dbc; 0: every plant step) and latency_s (0: a command acts from the sample it
+// was computed from), both whole multiples of solver.step_s. codec = "can": the built-in
+// ECU's sensors and commands pass through the CAN codec (quantised exactly as on the bus), the
+// in-process reference of a bus run.
+inline constexpr double kDefaultEcuPeriod_s = 0.01;
+enum class EcuCodec { kNone, kCan };
 struct EcuTiming {
-  double period_s = 0.0;
+  double period_s = kDefaultEcuPeriod_s;
   double latency_s = 0.0;
+  std::string codec = "none";  // "none" or "can"
 };
 
 struct Scenario {
@@ -58,6 +64,7 @@ struct Scenario {
   // the built-in ECU of vehicles that have one (the EV's follower, MBecu1/1soc/2)
   std::variant<std::monostate, ecu::EvFollowerParams, ecu::PsdEcuParams> ecu;
   EcuTiming ecu_timing;
+  EcuCodec ecu_codec = EcuCodec::kNone;
   SolverSettings solver;
   OutputSettings output;
   std::vector<std::string> warnings;  // legal but surprising settings, "file:line: field = value: why"

@@ -156,6 +156,7 @@ plant::MapIceParams read_ice(Reader r, Context& ctx) {
 void read_ecu_timing(Reader& r, EcuTiming& t) {
   t.period_s = r.number("period_s", t.period_s);
   t.latency_s = r.number("latency_s", t.latency_s);
+  t.codec = r.text("codec", t.codec);
 }
 
 }  // namespace ehpt::hil::detail

@@ -55,6 +55,8 @@ class WallClock {
     clock_.sleep_until_ns(start_ns_ + tick_ * period_ns_);
   }
   std::int64_t missed_ticks() const { return missed_; }
+  // when the step last waited for was due (its lateness = now - this)
+  std::int64_t last_deadline_ns() const { return start_ns_ + tick_ * period_ns_; }
 
  private:
   Clock& clock_;

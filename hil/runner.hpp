@@ -177,6 +177,7 @@ class Runner {
   const State& initial_state() const { return x0_; }
   const Modes& modes() const { return m_; }
   const Outputs& last_outputs() const { return y_; }
+  const Outputs& initial_outputs() const { return y0_; }  // at t_0 (once observed)
 
   // Recorded rows since the last take (row-major, columns as given); clears the buffer.
   std::span<const double> rows() const { return recorder_.rows(); }
@@ -220,6 +221,7 @@ class Runner {
     } else {
       plant_.outputs(t_s, x_, m_, inputs_, y_);
     }
+    if (n == 0) y0_ = y_;
     metrics_.observe(n, y_);
     const auto fault = static_cast<unsigned>(y_.fault);
     if (fault != 0 && stats_.fault == 0) {
@@ -255,7 +257,7 @@ class Runner {
   Modes m_{};
   Inputs inputs_{};
   typename SensorsOf<Plant>::type sensors_{};
-  Outputs y_{};
+  Outputs y_{}, y0_{};
   State dx_observed_;                   // dx/dt with the outputs at step dx_observed_step_
   std::int64_t dx_observed_step_ = -1;  // -1: none that the next step may use
   RunStats stats_;

@@ -73,6 +73,8 @@ class Simulation {
   virtual const MetricTotals& metrics() const = 0;
   virtual plant::EnergyAudit audit() const = 0;  // end of run; allocates
   virtual RunFigures figures() const = 0;
+  // Signals the CAN codec saturated (ecu.codec = "can"; else 0).
+  virtual std::int64_t ecu_codec_saturations() const { return 0; }
 };
 
 // The simulation of a loaded scenario, built by its vehicle kind's factory.

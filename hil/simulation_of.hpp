@@ -28,7 +28,6 @@ class SimulationOf final : public Simulation {
                                   opt.chunk_steps, opt.external_ecu ? nullptr : controller_.get(),
                                   sc.solver.ecu_ratio, sc.solver.ecu_latency_steps, nullptr, opt.fault_policy,
                                   opt.external_ecu);
-    y0_ = runner_->last_outputs();
     values_.resize(signals_.size());
   }
 
@@ -55,6 +54,13 @@ class SimulationOf final : public Simulation {
   const MetricTotals& metrics() const override { return runner_->metrics(); }
   plant::EnergyAudit audit() const override { return plant_->audit(runner_->initial_state(), runner_->state()); }
 
+  std::int64_t ecu_codec_saturations() const override {
+    if constexpr (requires(const Controller& c) { c.saturated_signals(); }) {
+      return controller_->saturated_signals();
+    }
+    return 0;
+  }
+
   RunFigures figures() const override {
     // from the outputs the vehicle declares (Plant::kMetrics), at t = 0 and now
     const auto& src = Plant::kMetrics;
@@ -62,10 +68,10 @@ class SimulationOf final : public Simulation {
     RunFigures f;
     if (src.distance_m != nullptr) f.distance_m = y1.*src.distance_m;
     if (src.soc != nullptr) {
-      f.soc_start = y0_.*src.soc;
+      f.soc_start = runner_->initial_outputs().*src.soc;
       f.soc_end = y1.*src.soc;
     }
-    if (src.fuel_g != nullptr) f.fuel_g = y1.*src.fuel_g - y0_.*src.fuel_g;
+    if (src.fuel_g != nullptr) f.fuel_g = y1.*src.fuel_g - runner_->initial_outputs().*src.fuel_g;
     f.fuel_density_kg_m3 = fuel_density_kg_m3_;
     return f;
   }
@@ -95,7 +101,6 @@ class SimulationOf final : public Simulation {
   std::vector<SignalInfo> signals_;
   std::vector<double> values_;  // outputs(), sized at start-up
   std::unique_ptr<R> runner_;
-  typename Plant::Outputs y0_{};
 };
 
 }  // namespace ehpt::hil

@@ -8,6 +8,7 @@
 #include <string_view>
 #include <vector>
 
+#include "hil/codec_ecu.hpp"
 #include "hil/config_components.hpp"
 #include "hil/simulation_of.hpp"
 #include "hil/vehicle_kinds.hpp"
@@ -31,6 +32,12 @@ template <class Plant, class Controller = NoController>
 inline std::unique_ptr<Simulation> simulate(const Scenario& sc, const SimulationOptions& opt,
                                      std::unique_ptr<const Plant> plant, std::unique_ptr<Controller> controller,
                                      double fuel_density_kg_m3 = 0.0) {
+  if constexpr (!std::is_same_v<Controller, NoController> && !is_codec_ecu<Controller>) {
+    // every built-in ECU talks through the codec seam (a pass-through unless ecu.codec = "can")
+    return simulate(sc, opt, std::move(plant),
+                    std::make_unique<CodecEcu<Controller>>(std::move(controller), sc.ecu_codec == EcuCodec::kCan),
+                    fuel_density_kg_m3);
+  }
   if (sc.solver.kind == SolverKind::kRk4) {
     return std::make_unique<SimulationOf<Plant, solvers::Rk4<Plant>, Controller>>(
         sc, opt, std::move(plant), std::move(controller), fuel_density_kg_m3);

@@ -683,7 +683,8 @@ TEST(CliOutputs, AnEnergyAuditThatDoesNotCloseIsFlagged) {
   const fs::path root = fresh("audit");
   // implicit Euler (first order) at 0.2 s: the energy integrals drift by 2.7 %
   const Result r = ehpt_argv({"run", ehpt::test::source_path("scenarios/ev_sort1.toml"), "--set",
-                              "solver.method=implicit-euler", "--set", "solver.step_s=0.2", "--out",
+                              "solver.method=implicit-euler", "--set", "solver.step_s=0.2", "--set",
+                              "vehicle.ecu.period_s=0.2", "--out",
                               (root / "run").string()});
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_HAS(r.err, "warning: the energy audit does not close: relative residual 0.0265 > 0.001");

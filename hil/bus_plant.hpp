@@ -1,0 +1,46 @@
+#pragma once
+// The plant on a CAN bus (`ehpt plant`): the scenario's vehicle without its built-in ECU; an
+// ECU outside (another process, a python-can script, a real ECU) reads the sensor frames and
+// sends the command frames of the contract (io/can/ehpt.dbc). Two pacers:
+//   lockstep:   at each ECU sample the plant sends its sensors and waits for the ECU's
+//               command for that sample before it advances one ECU period (deterministic SIL,
+//               as fast as both sides go);
+//   wall clock: the plant advances in real time (sleep until each step's deadline), sends its
+//               sensors at each sample and applies the latest complete command when it
+//               arrives, counting staleness.
+// Safety (both): a command older than the timeout (default 3 ECU periods) puts the plant in
+// its safe state: torque and power references zero, the engine's ON/OFF held as it was (a
+// stale frame cannot switch it), ecuTimeout set in PlantStatus, counted; the next complete
+// fresh command ends it. Frames that are not the contract's (unknown id, wrong length,
+// repeated or jumping counter, a value outside its range) are counted and ignored. Nothing on
+// the bus allocates or throws in the run phase.
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "hil/batch.hpp"
+#include "hil/config.hpp"
+#include "io/can/transport.hpp"
+
+namespace ehpt::hil {
+
+struct BusPlantOptions {
+  bool lockstep = false;
+  double command_timeout_s = 0.0;  // 0: 3 ECU periods
+  // lockstep: how long (wall) the plant waits for the command of a sample before it goes on
+  // without one (the command then ages like a late one on a real bus)
+  double lockstep_wait_s = 1.0;
+  double peer_wait_s = 60.0;  // wall time to wait for an ECU to connect before t = 0
+  std::string log_interface = "can0";  // the interface name in bus.log lines
+};
+
+// False and a one-line reason if the scenario cannot run on the bus (a rig without bus
+// messages, an ECU latency the bus cannot honour).
+bool can_run_on_bus(const Scenario& sc, std::string& why);
+// The driver of `ehpt plant` (nullptr and why if !can_run_on_bus).
+std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::can::Transport& bus,
+                                               const BusPlantOptions& opt, std::string& error);
+
+}  // namespace ehpt::hil

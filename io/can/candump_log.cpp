@@ -1,0 +1,117 @@
+#include "io/can/candump_log.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+namespace ehpt::io::can {
+
+namespace {
+int hex_value(char c) {
+  if (c >= '0' && c <= '9') return c - '0';
+  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+  return -1;
+}
+}  // namespace
+
+void append_candump_line(std::string& out, double time_s, std::string_view interface_name, const Frame& f) {
+  // seconds and microseconds as integers: the same text for the same time on every machine
+  const double t = std::isfinite(time_s) && time_s >= 0.0 ? time_s : 0.0;
+  auto us = static_cast<long long>(std::llround(t * 1e6));
+  char head[48];
+  const int n = std::snprintf(head, sizeof head, "(%lld.%06lld) ", us / 1000000, us % 1000000);
+  out.append(head, static_cast<std::size_t>(n));
+  out.append(interface_name);
+  char body[32];
+  int m = std::snprintf(body, sizeof body, " %03X#", static_cast<unsigned>(f.id & kMaxStandardId));
+  static const char kHex[] = "0123456789ABCDEF";
+  for (int i = 0; i < f.len && i < 8; ++i) {
+    body[m++] = kHex[f.data[static_cast<std::size_t>(i)] >> 4];
+    body[m++] = kHex[f.data[static_cast<std::size_t>(i)] & 0x0F];
+  }
+  body[m++] = '\n';
+  out.append(body, static_cast<std::size_t>(m));
+}
+
+bool parse_candump_line(std::string_view line, CandumpLine& out, const char*& why) {
+  while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.remove_suffix(1);
+  if (line.size() < 3 || line.front() != '(') {
+    why = "does not start with '(' and a time stamp";
+    return false;
+  }
+  const std::size_t close = line.find(')');
+  if (close == std::string_view::npos) {
+    why = "no ')' after the time stamp";
+    return false;
+  }
+  // seconds.microseconds, digits only
+  double t = 0.0, scale = 0.0;
+  for (std::size_t i = 1; i < close; ++i) {
+    const char c = line[i];
+    if (c == '.' && scale == 0.0) {
+      scale = 0.1;
+    } else if (c >= '0' && c <= '9') {
+      if (scale == 0.0) {
+        t = t * 10.0 + (c - '0');
+      } else {
+        t += (c - '0') * scale;
+        scale /= 10.0;
+      }
+    } else {
+      why = "the time stamp is not SECONDS.MICROSECONDS";
+      return false;
+    }
+  }
+  std::string_view rest = line.substr(close + 1);
+  if (rest.empty() || rest.front() != ' ') {
+    why = "no interface name after the time stamp";
+    return false;
+  }
+  rest.remove_prefix(1);
+  const std::size_t space = rest.find(' ');
+  if (space == 0 || space == std::string_view::npos) {
+    why = "no interface name after the time stamp";
+    return false;
+  }
+  out.interface_name = rest.substr(0, space);
+  std::string_view frame = rest.substr(space + 1);
+  const std::size_t hash = frame.find('#');
+  if (hash == std::string_view::npos || hash == 0 || hash > 3) {
+    why = "the frame is not ID#DATA with a standard (3-digit) id";
+    return false;
+  }
+  std::uint32_t id = 0;
+  for (std::size_t i = 0; i < hash; ++i) {
+    const int v = hex_value(frame[i]);
+    if (v < 0) {
+      why = "the id is not hexadecimal";
+      return false;
+    }
+    id = id * 16 + static_cast<std::uint32_t>(v);
+  }
+  const std::string_view data = frame.substr(hash + 1);
+  if (data.size() % 2 != 0 || data.size() > 16) {
+    why = "the data is not 0..8 bytes of two hex digits";
+    return false;
+  }
+  Frame f;
+  f.id = id;
+  f.len = static_cast<std::uint8_t>(data.size() / 2);
+  for (std::size_t i = 0; i < f.len; ++i) {
+    const int hi = hex_value(data[2 * i]), lo = hex_value(data[2 * i + 1]);
+    if (hi < 0 || lo < 0) {
+      why = "the data is not hexadecimal";
+      return false;
+    }
+    f.data[i] = static_cast<std::uint8_t>(hi * 16 + lo);
+  }
+  if (f.id > kMaxStandardId) {
+    why = "the id is above 0x7FF";
+    return false;
+  }
+  out.time_s = t;
+  out.frame = f;
+  return true;
+}
+
+}  // namespace ehpt::io::can

@@ -1,0 +1,25 @@
+#pragma once
+// candump -L log lines, "(1700000000.123456) vcan0 123#1122334455667788": what can-utils'
+// candump -L writes and canplayer reads, and what python-can's CanutilsLogReader reads. Pure.
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+#include "io/can/frame.hpp"
+
+namespace ehpt::io::can {
+
+// Appends one line (with '\n'). Allocates only if `out` lacks the capacity (reserve it).
+void append_candump_line(std::string& out, double time_s, std::string_view interface_name, const Frame& f);
+
+struct CandumpLine {
+  double time_s = 0.0;
+  std::string_view interface_name;  // a view into the parsed line
+  Frame frame;
+};
+// Parses one line (without or with its '\n'); false and why if it is not a classic
+// standard-id data frame line.
+bool parse_candump_line(std::string_view line, CandumpLine& out, const char*& why);
+
+}  // namespace ehpt::io::can

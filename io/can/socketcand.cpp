@@ -1,0 +1,640 @@
+#include "io/can/socketcand.hpp"
+
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <netdb.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <array>
+#include <cerrno>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <string_view>
+#include <vector>
+
+namespace ehpt::io::can {
+
+namespace {
+
+std::int64_t now_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+double wall_time_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+int hex_value(char c) {
+  if (c >= '0' && c <= '9') return c - '0';
+  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+  return -1;
+}
+
+// A hexadecimal number of 1..max_digits digits; -1 if it is not one.
+long parse_hex(std::string_view s, std::size_t max_digits) {
+  if (s.empty() || s.size() > max_digits) return -1;
+  long v = 0;
+  for (char c : s) {
+    const int d = hex_value(c);
+    if (d < 0) return -1;
+    v = v * 16 + d;
+  }
+  return v;
+}
+
+// The next space-separated token of s (s advances past it).
+std::string_view next_token(std::string_view& s) {
+  while (!s.empty() && s.front() == ' ') s.remove_prefix(1);
+  const std::size_t end = s.find(' ');
+  const std::string_view tok = s.substr(0, end);
+  s.remove_prefix(end == std::string_view::npos ? s.size() : end);
+  return tok;
+}
+
+// "< frame 123 1.000000 1122334455667788 > " into buf; returns its length.
+std::size_t format_frame(char* buf, std::size_t size, const Frame& f, double time_s) {
+  const auto us = static_cast<long long>(time_s * 1e6);
+  int n = std::snprintf(buf, size, "< frame %03X %lld.%06lld ", static_cast<unsigned>(f.id & kMaxStandardId),
+                        us / 1000000, us % 1000000);
+  static const char kHex[] = "0123456789ABCDEF";
+  for (int i = 0; i < f.len && i < 8; ++i) {
+    buf[n++] = kHex[f.data[static_cast<std::size_t>(i)] >> 4];
+    buf[n++] = kHex[f.data[static_cast<std::size_t>(i)] & 0x0F];
+  }
+  if (f.len > 0) buf[n++] = ' ';
+  buf[n++] = '>';
+  buf[n++] = ' ';  // the separator python-can 4.1 needs (it drops one character per read)
+  return static_cast<std::size_t>(n);
+}
+
+// "< send 123 8 11 22 33 44 55 66 77 88 >"
+std::size_t format_send(char* buf, std::size_t size, const Frame& f) {
+  int n = std::snprintf(buf, size, "< send %03X %X", static_cast<unsigned>(f.id & kMaxStandardId), f.len);
+  for (int i = 0; i < f.len && i < 8; ++i) {
+    n += std::snprintf(buf + n, size - static_cast<std::size_t>(n), " %02X", f.data[static_cast<std::size_t>(i)]);
+  }
+  n += std::snprintf(buf + n, size - static_cast<std::size_t>(n), " > ");
+  return static_cast<std::size_t>(n);
+}
+
+void set_nodelay(int fd) {
+  int one = 1;
+  setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+}
+
+// One TCP connection with fixed buffers (sized at open: no allocation afterwards).
+struct Stream {
+  int fd = -1;
+  std::vector<char> in, out;
+  std::size_t in_len = 0, out_len = 0;
+
+  void reset(int new_fd) {
+    fd = new_fd;
+    in.assign(16384, '\0');
+    out.assign(1 << 18, '\0');
+    in_len = out_len = 0;
+  }
+  void close_fd() {
+    if (fd >= 0) ::close(fd);
+    fd = -1;
+    in_len = out_len = 0;
+  }
+  // A handshake reply: its own write (python-can compares one whole read with it).
+  bool write_alone(std::string_view s) const {
+    std::size_t done = 0;
+    const std::int64_t deadline = now_ns() + 1'000'000'000;
+    while (done < s.size()) {
+      const ssize_t n = ::send(fd, s.data() + done, s.size() - done, MSG_NOSIGNAL);
+      if (n > 0) {
+        done += static_cast<std::size_t>(n);
+      } else if (n < 0 && (errno == EAGAIN || errno == EINTR) && now_ns() < deadline) {
+        pollfd p{fd, POLLOUT, 0};
+        ::poll(&p, 1, 10);
+      } else {
+        return false;
+      }
+    }
+    return true;
+  }
+  bool queue(const char* s, std::size_t n) {
+    if (out_len + n > out.size()) return false;
+    std::memcpy(out.data() + out_len, s, n);
+    out_len += n;
+    return true;
+  }
+  // Non-blocking; false if the connection is gone.
+  bool flush() {
+    std::size_t done = 0;
+    while (done < out_len) {
+      const ssize_t n = ::send(fd, out.data() + done, out_len - done, MSG_NOSIGNAL | MSG_DONTWAIT);
+      if (n > 0) {
+        done += static_cast<std::size_t>(n);
+      } else if (n < 0 && errno == EINTR) {
+        continue;
+      } else if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
+        break;
+      } else {
+        return false;
+      }
+    }
+    std::memmove(out.data(), out.data() + done, out_len - done);
+    out_len -= done;
+    return true;
+  }
+  // Reads what is there; false if the peer closed or the connection failed.
+  bool read_some() {
+    for (;;) {
+      if (in_len == in.size()) return true;  // full: the caller takes messages out first
+      const ssize_t n = ::recv(fd, in.data() + in_len, in.size() - in_len, MSG_DONTWAIT);
+      if (n > 0) {
+        in_len += static_cast<std::size_t>(n);
+        continue;
+      }
+      if (n == 0) return false;
+      if (errno == EINTR) continue;
+      return errno == EAGAIN || errno == EWOULDBLOCK;
+    }
+  }
+  // Takes the next complete "< ... >" message out of the input (view valid until the next
+  // call that changes `in`); empty if none. Junk before '<' is dropped and counted.
+  std::string_view next_message(std::size_t& consumed, std::int64_t& junk) const {
+    std::size_t i = consumed;
+    while (i < in_len && in[i] != '<') {
+      if (in[i] != ' ' && in[i] != '\n' && in[i] != '\r' && in[i] != '\t') ++junk;
+      ++i;
+    }
+    consumed = i;
+    if (i == in_len) return {};
+    const void* end = std::memchr(in.data() + i, '>', in_len - i);
+    if (end == nullptr) return {};
+    const std::size_t stop = static_cast<std::size_t>(static_cast<const char*>(end) - in.data());
+    consumed = stop + 1;
+    return {in.data() + i, stop + 1 - i};
+  }
+  void drop_consumed(std::size_t consumed, std::int64_t& malformed) {
+    if (consumed == 0 && in_len == in.size()) {  // a full buffer without a message: junk
+      ++malformed;
+      in_len = 0;
+      return;
+    }
+    std::memmove(in.data(), in.data() + consumed, in_len - consumed);
+    in_len -= consumed;
+  }
+};
+
+// A fixed ring of received frames.
+class FrameRing {
+ public:
+  FrameRing() : frames_(4096) {}
+  bool push(const Frame& f) {
+    if (count_ == frames_.size()) return false;
+    frames_[(head_ + count_) % frames_.size()] = f;
+    ++count_;
+    return true;
+  }
+  std::size_t pop(std::span<Frame> out) {
+    std::size_t n = 0;
+    while (n < out.size() && count_ > 0) {
+      out[n++] = frames_[head_];
+      head_ = (head_ + 1) % frames_.size();
+      --count_;
+    }
+    return n;
+  }
+
+ private:
+  std::vector<Frame> frames_;
+  std::size_t head_ = 0, count_ = 0;
+};
+
+// getaddrinfo for a TCP endpoint; the first IPv4/IPv6 address.
+bool resolve(const std::string& host, std::uint16_t port, bool passive, sockaddr_storage& addr, socklen_t& len,
+             std::string& error) {
+  addrinfo hints{};
+  hints.ai_family = AF_UNSPEC;
+  hints.ai_socktype = SOCK_STREAM;
+  hints.ai_flags = passive ? AI_PASSIVE : 0;
+  addrinfo* res = nullptr;
+  const std::string service = std::to_string(port);
+  const int rc = getaddrinfo(host.empty() ? nullptr : host.c_str(), service.c_str(), &hints, &res);
+  if (rc != 0 || res == nullptr) {
+    error = "cannot resolve host '" + host + "': " + gai_strerror(rc);
+    return false;
+  }
+  std::memcpy(&addr, res->ai_addr, res->ai_addrlen);
+  len = res->ai_addrlen;
+  freeaddrinfo(res);
+  return true;
+}
+
+constexpr std::size_t kMaxClients = 8;
+// after its last "< ok >", a client gets frames only this much later, so that its read of
+// the "< ok >" cannot hold a frame too (python-can compares that read with "< ok >")
+constexpr std::int64_t kSettleNs = 50'000'000;
+
+class Server final : public Transport {
+ public:
+  Server(int listen_fd, std::string name) : listen_fd_(listen_fd), name_(std::move(name)) {
+    for (auto& c : clients_) {
+      c.stream.reset(-1);
+    }
+  }
+  ~Server() override {
+    for (auto& c : clients_) c.stream.close_fd();
+    ::close(listen_fd_);
+  }
+
+  bool send(const Frame& f) override {
+    pump();
+    char buf[96];
+    const std::size_t n = format_frame(buf, sizeof buf, f, wall_time_s());
+    const std::int64_t now = now_ns();
+    bool sent = false;
+    for (auto& c : clients_) {
+      if (!live(c, now)) continue;
+      if (c.stream.queue(buf, n)) {
+        sent = true;
+      } else {
+        ++counters_.send_dropped;  // this client is too slow: its buffer is full
+      }
+      if (!c.stream.flush()) drop(c);
+    }
+    if (sent) {
+      ++counters_.frames_out;
+    } else {
+      ++counters_.send_dropped;
+    }
+    return sent;
+  }
+
+  std::size_t receive(std::span<Frame> out) override {
+    pump();
+    return ring_.pop(out);
+  }
+
+  bool wait(std::int64_t timeout_ns) override {
+    std::array<pollfd, kMaxClients + 1> fds{};
+    std::size_t n = 0;
+    fds[n++] = {listen_fd_, POLLIN, 0};
+    for (auto& c : clients_) {
+      if (c.stream.fd < 0) continue;
+      fds[n++] = {c.stream.fd, static_cast<short>(POLLIN | (c.stream.out_len > 0 ? POLLOUT : 0)), 0};
+    }
+    const int ms = timeout_ns <= 0 ? 0 : static_cast<int>(std::min<std::int64_t>((timeout_ns + 999'999) / 1'000'000, 60'000));
+    // a client settling: wake when it goes live
+    const int rc = ::poll(fds.data(), n, ms);
+    return rc > 0;
+  }
+
+  bool has_peer() const override {
+    const std::int64_t now = now_ns();
+    for (const auto& c : clients_) {
+      if (live(c, now)) return true;
+    }
+    return false;
+  }
+  const TransportCounters& counters() const override { return counters_; }
+  std::string describe() const override { return name_; }
+
+ private:
+  enum class State { kFree, kHello, kOpen, kRaw };
+  struct Client {
+    Stream stream;
+    State state = State::kFree;
+    std::int64_t live_after_ns = 0;
+  };
+
+  static bool live(const Client& c, std::int64_t now) { return c.state == State::kRaw && now >= c.live_after_ns; }
+
+  void drop(Client& c) {
+    if (c.state == State::kRaw) ++counters_.peers_lost;
+    c.stream.close_fd();
+    c.state = State::kFree;
+  }
+
+  // All non-blocking I/O: new clients, their messages, pending output.
+  void pump() {
+    for (;;) {
+      const int fd = ::accept4(listen_fd_, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
+      if (fd < 0) break;
+      Client* slot = nullptr;
+      for (auto& c : clients_) {
+        if (c.state == State::kFree) {
+          slot = &c;
+          break;
+        }
+      }
+      if (slot == nullptr) {  // full: refuse politely
+        ::close(fd);
+        ++counters_.rx_malformed;
+        continue;
+      }
+      set_nodelay(fd);
+      slot->stream.fd = fd;
+      slot->stream.in_len = slot->stream.out_len = 0;
+      slot->state = State::kHello;
+      if (!slot->stream.write_alone("< hi >")) drop(*slot);
+    }
+    const std::int64_t now = now_ns();
+    for (auto& c : clients_) {
+      if (c.state == State::kFree) continue;
+      const bool open = c.stream.read_some();
+      std::size_t consumed = 0;
+      for (;;) {
+        const std::string_view m = c.stream.next_message(consumed, counters_.rx_malformed);
+        if (m.empty()) break;
+        handle(c, m, now);
+        if (c.state == State::kFree) break;
+      }
+      if (c.state == State::kFree) continue;
+      c.stream.drop_consumed(consumed, counters_.rx_malformed);
+      if (!open || !c.stream.flush()) drop(c);
+    }
+  }
+
+  void handle(Client& c, std::string_view m, std::int64_t now) {
+    Frame f;
+    switch (parse_socketcand(m, f)) {
+      case SocketcandMessage::kOpen:
+        if (c.state == State::kHello && c.stream.write_alone("< ok >")) {
+          c.state = State::kOpen;
+        } else {
+          ++counters_.error_frames;
+        }
+        return;
+      case SocketcandMessage::kRawmode:
+        if (c.state == State::kOpen && c.stream.write_alone("< ok >")) {
+          c.state = State::kRaw;
+          c.live_after_ns = now + kSettleNs;
+          ++counters_.peers_connected;
+        } else {
+          ++counters_.error_frames;
+        }
+        return;
+      case SocketcandMessage::kSend:
+        if (c.state != State::kRaw) {
+          ++counters_.error_frames;
+          return;
+        }
+        if (ring_.push(f)) {
+          ++counters_.frames_in;
+        } else {
+          ++counters_.send_dropped;  // the plant did not keep up: the frame is lost
+        }
+        forward(c, f, now);
+        return;
+      case SocketcandMessage::kMalformed:
+        ++counters_.rx_malformed;
+        return;
+      default:
+        ++counters_.error_frames;  // a command we do not serve (bcmode, echo, ...)
+        return;
+    }
+  }
+
+  // a bus: the other clients hear what one sends
+  void forward(const Client& from, const Frame& f, std::int64_t now) {
+    char buf[96];
+    const std::size_t n = format_frame(buf, sizeof buf, f, wall_time_s());
+    for (auto& c : clients_) {
+      if (&c == &from || !live(c, now)) continue;
+      if (!c.stream.queue(buf, n)) ++counters_.send_dropped;
+    }
+  }
+
+  int listen_fd_;
+  std::string name_;
+  std::array<Client, kMaxClients> clients_;
+  FrameRing ring_;
+  TransportCounters counters_;
+};
+
+class Client final : public Transport {
+ public:
+  Client(int fd, std::string name) : name_(std::move(name)) { stream_.reset(fd); }
+  ~Client() override { stream_.close_fd(); }
+
+  // start-up: the handshake, within the deadline
+  bool handshake(const std::string& channel, std::int64_t deadline_ns, std::string& error) {
+    const std::string open = "< open " + channel + " >";
+    const char* expect[] = {"hi", "ok", "ok"};
+    for (int step = 0; step < 3; ++step) {
+      std::string_view m;
+      std::size_t consumed = 0;
+      std::int64_t junk = 0;
+      while ((m = stream_.next_message(consumed, junk)).empty()) {
+        if (now_ns() > deadline_ns) {
+          error = "no socketcand handshake (waited for '< " + std::string(expect[step]) + " >')";
+          return false;
+        }
+        pollfd p{stream_.fd, POLLIN, 0};
+        ::poll(&p, 1, 50);
+        if (!stream_.read_some()) {
+          error = "the server closed the connection during the handshake";
+          return false;
+        }
+        consumed = 0;
+      }
+      Frame f;
+      const SocketcandMessage kind = parse_socketcand(m, f);
+      const std::string text(m);
+      stream_.drop_consumed(consumed, junk);
+      if (kind != (step == 0 ? SocketcandMessage::kHi : SocketcandMessage::kOk)) {
+        error = "unexpected socketcand reply '" + text + "' (wanted '< " + expect[step] + " >')";
+        return false;
+      }
+      if (step < 2 && !stream_.write_alone(step == 0 ? std::string_view(open) : std::string_view("< rawmode >"))) {
+        error = "cannot write to the server";
+        return false;
+      }
+    }
+    connected_ = true;
+    return true;
+  }
+
+  bool send(const Frame& f) override {
+    if (!connected_) {
+      ++counters_.send_dropped;
+      return false;
+    }
+    char buf[96];
+    const std::size_t n = format_send(buf, sizeof buf, f);
+    if (!stream_.queue(buf, n)) {
+      ++counters_.send_dropped;
+      return false;
+    }
+    if (!stream_.flush()) lose();
+    ++counters_.frames_out;
+    return true;
+  }
+
+  std::size_t receive(std::span<Frame> out) override {
+    if (connected_) {
+      const bool open = stream_.read_some();
+      std::size_t consumed = 0;
+      for (;;) {
+        const std::string_view m = stream_.next_message(consumed, counters_.rx_malformed);
+        if (m.empty()) break;
+        Frame f;
+        switch (parse_socketcand(m, f)) {
+          case SocketcandMessage::kFrame:
+            if (ring_.push(f)) {
+              ++counters_.frames_in;
+            } else {
+              ++counters_.send_dropped;
+            }
+            break;
+          case SocketcandMessage::kMalformed: ++counters_.rx_malformed; break;
+          default: ++counters_.error_frames; break;
+        }
+      }
+      stream_.drop_consumed(consumed, counters_.rx_malformed);
+      if (!open || !stream_.flush()) lose();
+    }
+    return ring_.pop(out);
+  }
+
+  bool wait(std::int64_t timeout_ns) override {
+    if (!connected_) return false;
+    pollfd p{stream_.fd, static_cast<short>(POLLIN | (stream_.out_len > 0 ? POLLOUT : 0)), 0};
+    const int ms = timeout_ns <= 0 ? 0 : static_cast<int>(std::min<std::int64_t>((timeout_ns + 999'999) / 1'000'000, 60'000));
+    return ::poll(&p, 1, ms) > 0;
+  }
+  bool has_peer() const override { return connected_; }
+  const TransportCounters& counters() const override { return counters_; }
+  std::string describe() const override { return name_; }
+
+ private:
+  void lose() {
+    if (connected_) ++counters_.peers_lost;
+    connected_ = false;
+  }
+  Stream stream_;
+  bool connected_ = false;
+  std::string name_;
+  FrameRing ring_;
+  TransportCounters counters_;
+};
+
+}  // namespace
+
+SocketcandMessage parse_socketcand(std::string_view m, Frame& frame) {
+  if (m.size() < 3 || m.front() != '<' || m.back() != '>') return SocketcandMessage::kMalformed;
+  std::string_view body = m.substr(1, m.size() - 2);
+  const std::string_view word = next_token(body);
+  if (word == "hi") return SocketcandMessage::kHi;
+  if (word == "ok") return SocketcandMessage::kOk;
+  if (word == "rawmode") return SocketcandMessage::kRawmode;
+  if (word == "open") return next_token(body).empty() ? SocketcandMessage::kMalformed : SocketcandMessage::kOpen;
+  if (word == "error") return SocketcandMessage::kError;
+  Frame f;
+  if (word == "send") {  // < send ID LEN B0 B1 ... >
+    const long id = parse_hex(next_token(body), 3);
+    const long len = parse_hex(next_token(body), 1);
+    if (id < 0 || id > static_cast<long>(kMaxStandardId) || len < 0 || len > 8) return SocketcandMessage::kMalformed;
+    f.id = static_cast<std::uint32_t>(id);
+    f.len = static_cast<std::uint8_t>(len);
+    for (long i = 0; i < len; ++i) {
+      const long b = parse_hex(next_token(body), 2);
+      if (b < 0) return SocketcandMessage::kMalformed;
+      f.data[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(b);
+    }
+    if (!next_token(body).empty()) return SocketcandMessage::kMalformed;
+    frame = f;
+    return SocketcandMessage::kSend;
+  }
+  if (word == "frame") {  // < frame ID SECS.USECS DATA >
+    const long id = parse_hex(next_token(body), 3);
+    const std::string_view time = next_token(body);
+    const std::string_view data = next_token(body);
+    if (id < 0 || id > static_cast<long>(kMaxStandardId) || time.empty() || data.size() % 2 != 0 || data.size() > 16 ||
+        !next_token(body).empty()) {
+      return SocketcandMessage::kMalformed;
+    }
+    f.id = static_cast<std::uint32_t>(id);
+    f.len = static_cast<std::uint8_t>(data.size() / 2);
+    for (std::size_t i = 0; i < f.len; ++i) {
+      const long b = parse_hex(data.substr(2 * i, 2), 2);
+      if (b < 0) return SocketcandMessage::kMalformed;
+      f.data[i] = static_cast<std::uint8_t>(b);
+    }
+    frame = f;
+    return SocketcandMessage::kFrame;
+  }
+  return SocketcandMessage::kOther;
+}
+
+std::unique_ptr<Transport> open_socketcand_server(const std::string& host, std::uint16_t port, std::string& error) {
+  const std::string name = "socketcand:" + host + ":" + std::to_string(port);
+  sockaddr_storage addr{};
+  socklen_t len = 0;
+  if (!resolve(host, port, true, addr, len, error)) {
+    error = name + ": " + error;
+    return nullptr;
+  }
+  const int fd = ::socket(addr.ss_family, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+  if (fd < 0) {
+    error = name + ": cannot create a socket: " + std::strerror(errno);
+    return nullptr;
+  }
+  int one = 1;
+  setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);  // a restart binds over TIME_WAIT
+  if (::bind(fd, reinterpret_cast<const sockaddr*>(&addr), len) != 0 || ::listen(fd, 8) != 0) {
+    const int e = errno;
+    ::close(fd);
+    error = name + ": cannot listen: " + (e == EADDRINUSE ? std::string("port in use") : std::string(std::strerror(e)));
+    return nullptr;
+  }
+  return std::make_unique<Server>(fd, name);
+}
+
+std::unique_ptr<Transport> open_socketcand_client(const std::string& host, std::uint16_t port,
+                                                  const std::string& channel, double timeout_s, std::string& error) {
+  const std::string name = "socketcand:" + host + ":" + std::to_string(port);
+  sockaddr_storage addr{};
+  socklen_t len = 0;
+  if (!resolve(host, port, false, addr, len, error)) {
+    error = name + ": " + error;
+    return nullptr;
+  }
+  const std::int64_t deadline = now_ns() + static_cast<std::int64_t>(timeout_s * 1e9);
+  const int fd = ::socket(addr.ss_family, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+  if (fd < 0) {
+    error = name + ": cannot create a socket: " + std::strerror(errno);
+    return nullptr;
+  }
+  if (::connect(fd, reinterpret_cast<const sockaddr*>(&addr), len) != 0 && errno != EINPROGRESS) {
+    const int e = errno;
+    ::close(fd);
+    error = name + ": cannot connect: " + std::strerror(e);
+    return nullptr;
+  }
+  pollfd p{fd, POLLOUT, 0};
+  const int ms = static_cast<int>(std::max<std::int64_t>(0, (deadline - now_ns()) / 1'000'000));
+  int so_error = 0;
+  socklen_t so_len = sizeof so_error;
+  if (::poll(&p, 1, ms) != 1 || getsockopt(fd, SOL_SOCKET, SO_ERROR, &so_error, &so_len) != 0 || so_error != 0) {
+    ::close(fd);
+    error = name + ": cannot connect: " + (so_error != 0 ? std::strerror(so_error) : "timed out");
+    return nullptr;
+  }
+  set_nodelay(fd);
+  auto client = std::make_unique<Client>(fd, name);
+  if (!client->handshake(channel, deadline, error)) {
+    error = name + ": " + error;
+    return nullptr;
+  }
+  return client;
+}
+
+}  // namespace ehpt::io::can

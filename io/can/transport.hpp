@@ -1,0 +1,42 @@
+#pragma once
+// A CAN transport: how frames reach the other side (SocketCAN raw socket, a socketcand TCP
+// endpoint, an in-memory pair for tests). Owned by the target, never called from plant code.
+// Every call is non-blocking and never throws; problems are counted, never fatal, except at
+// open (a clear error message). No allocation after open.
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+
+#include "io/can/frame.hpp"
+
+namespace ehpt::io::can {
+
+struct TransportCounters {
+  std::int64_t frames_in = 0;       // data frames received and handed out
+  std::int64_t frames_out = 0;      // data frames sent
+  std::int64_t send_dropped = 0;    // not sent: TX queue full, no peer, peer too slow
+  std::int64_t error_frames = 0;    // CAN error frames (SocketCAN), protocol errors (socketcand)
+  std::int64_t rx_malformed = 0;    // received text or frames that are not a classic data frame
+  std::int64_t peers_connected = 0; // socketcand: clients that completed the handshake
+  std::int64_t peers_lost = 0;      // socketcand: clients that went away
+};
+
+class Transport {
+ public:
+  virtual ~Transport() = default;
+  // Queues one frame for sending; false (counted in send_dropped) if it cannot go now.
+  virtual bool send(const Frame& frame) = 0;
+  // Up to out.size() received frames (0: none now). Never blocks.
+  virtual std::size_t receive(std::span<Frame> out) = 0;
+  // Waits up to timeout_ns for something to receive (or a peer to arrive); true if there may
+  // be. The only call that may block, and only as long as asked.
+  virtual bool wait(std::int64_t timeout_ns) = 0;
+  // True when the other side can hear us (SocketCAN: always; socketcand: a client is in rawmode).
+  virtual bool has_peer() const = 0;
+  virtual const TransportCounters& counters() const = 0;
+  virtual std::string describe() const = 0;  // e.g. "socketcan:vcan0"
+};
+
+}  // namespace ehpt::io::can
