@@ -82,6 +82,7 @@ class BusPlant final : public ExternalDriver {
     if (!started_) {
       started_ = true;
       wait_for_peer(stop);
+      first_command(sim, stop);
       if (!opt_.lockstep) pacer_.wait_for_step(0);
     }
     const std::int64_t end = std::min(sim.total_steps(), sim.step_index() + max_steps);
@@ -187,6 +188,18 @@ class BusPlant final : public ExternalDriver {
     }
   }
 
+  // t = 0 waits for the ECU's first command (both pacers): sample 0 is sent again every
+  // lockstep_wait_s until it answers, up to peer_wait_s (an ECU on SocketCAN may start after
+  // the plant: there is no connection to wait for). A silence after that is a timeout.
+  void first_command(Simulation& sim, const std::atomic<int>* stop) {
+    const std::int64_t deadline = now_ns() + static_cast<std::int64_t>(opt_.peer_wait_s * 1e9);
+    for (;;) {
+      send_sample(sim, 0);
+      if (wait_for_command(sim, 0, stop, false)) return;
+      if (now_ns() > deadline || (stop != nullptr && stop->load() != 0)) return;
+    }
+  }
+
   void log_frames(std::span<const Frame> frames) {
     const double t = wall_time_s();
     for (const Frame& f : frames) io::can::append_candump_line(log_buf_, t, opt_.log_interface, f);
@@ -201,7 +214,7 @@ class BusPlant final : public ExternalDriver {
 
   // The sensors at t_n, then PlantStatus (the end of the sample).
   void send_sample(Simulation& sim, std::int64_t n) {
-    if (last_sample_ >= 0 && !command_since_sample_) ++stale_samples_;
+    if (last_sample_ >= 0 && last_sample_ != n && !command_since_sample_) ++stale_samples_;
     command_since_sample_ = false;
     last_sample_ = n;
     Sensors s;
@@ -215,18 +228,18 @@ class BusPlant final : public ExternalDriver {
     sent_ns_ = now_ns();
   }
 
-  // Lockstep: until the command of the sample is complete, or the wait runs out.
-  void wait_for_command(Simulation& sim, std::int64_t n, const std::atomic<int>* stop) {
+  // Until the command of the sample is complete (true), or the wait runs out.
+  bool wait_for_command(Simulation& sim, std::int64_t n, const std::atomic<int>* stop, bool count = true) {
     const std::int64_t deadline = sent_ns_ + static_cast<std::int64_t>(opt_.lockstep_wait_s * 1e9);
     for (;;) {
       if (drain(sim, n)) {
         round_trip_.record(now_ns() - sent_ns_);
-        return;
+        return true;
       }
       const std::int64_t left = deadline - now_ns();
       if (left <= 0 || (stop != nullptr && stop->load() != 0)) {
-        ++waits_timed_out_;
-        return;
+        waits_timed_out_ += count ? 1 : 0;
+        return false;
       }
       bus_.wait(std::min<std::int64_t>(left, 50'000'000));
     }

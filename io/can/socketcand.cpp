@@ -61,10 +61,12 @@ std::string_view next_token(std::string_view& s) {
   return tok;
 }
 
-// "< frame 123 1.000000 1122334455667788 > " into buf; returns its length.
+// " < frame 123 1.000000 1122334455667788 >" into buf; returns its length. The leading space
+// separates messages: python-can 4.1 drops the character after the last message of each
+// read (a frame lost at every read boundary without it), and warns about a trailing one.
 std::size_t format_frame(char* buf, std::size_t size, const Frame& f, double time_s) {
   const auto us = static_cast<long long>(time_s * 1e6);
-  int n = std::snprintf(buf, size, "< frame %03X %lld.%06lld ", static_cast<unsigned>(f.id & kMaxStandardId),
+  int n = std::snprintf(buf, size, " < frame %03X %lld.%06lld ", static_cast<unsigned>(f.id & kMaxStandardId),
                         us / 1000000, us % 1000000);
   static const char kHex[] = "0123456789ABCDEF";
   for (int i = 0; i < f.len && i < 8; ++i) {
@@ -73,7 +75,6 @@ std::size_t format_frame(char* buf, std::size_t size, const Frame& f, double tim
   }
   if (f.len > 0) buf[n++] = ' ';
   buf[n++] = '>';
-  buf[n++] = ' ';  // the separator python-can 4.1 needs (it drops one character per read)
   return static_cast<std::size_t>(n);
 }
 
@@ -169,10 +170,12 @@ struct Stream {
   // call that changes `in`); empty if none. Junk before '<' is dropped and counted.
   std::string_view next_message(std::size_t& consumed, std::int64_t& junk) const {
     std::size_t i = consumed;
+    bool junk_run = false;  // text between messages counts once per run
     while (i < in_len && in[i] != '<') {
-      if (in[i] != ' ' && in[i] != '\n' && in[i] != '\r' && in[i] != '\t') ++junk;
+      junk_run = junk_run || (in[i] != ' ' && in[i] != '\n' && in[i] != '\r' && in[i] != '\t');
       ++i;
     }
+    junk += junk_run ? 1 : 0;
     consumed = i;
     if (i == in_len) return {};
     const void* end = std::memchr(in.data() + i, '>', in_len - i);
@@ -181,8 +184,9 @@ struct Stream {
     consumed = stop + 1;
     return {in.data() + i, stop + 1 - i};
   }
-  void drop_consumed(std::size_t consumed, std::int64_t& malformed) {
-    if (consumed == 0 && in_len == in.size()) {  // a full buffer without a message: junk
+  // stalled: parsing stopped for want of room downstream (the buffer is not junk then)
+  void drop_consumed(std::size_t consumed, std::int64_t& malformed, bool stalled = false) {
+    if (consumed == 0 && in_len == in.size() && !stalled) {  // a full buffer without a message: junk
       ++malformed;
       in_len = 0;
       return;
@@ -196,6 +200,7 @@ struct Stream {
 class FrameRing {
  public:
   FrameRing() : frames_(4096) {}
+  bool full() const { return count_ == frames_.size(); }
   bool push(const Frame& f) {
     if (count_ == frames_.size()) return false;
     frames_[(head_ + count_) % frames_.size()] = f;
@@ -350,14 +355,16 @@ class Server final : public Transport {
       if (c.state == State::kFree) continue;
       const bool open = c.stream.read_some();
       std::size_t consumed = 0;
-      for (;;) {
+      // while the plant has not taken what came in, the rest waits in the socket (TCP's
+      // flow control slows the sender), so that no frame is dropped for want of room
+      while (!ring_.full()) {
         const std::string_view m = c.stream.next_message(consumed, counters_.rx_malformed);
         if (m.empty()) break;
         handle(c, m, now);
         if (c.state == State::kFree) break;
       }
       if (c.state == State::kFree) continue;
-      c.stream.drop_consumed(consumed, counters_.rx_malformed);
+      c.stream.drop_consumed(consumed, counters_.rx_malformed, ring_.full());
       if (!open || !c.stream.flush()) drop(c);
     }
   }
@@ -482,7 +489,7 @@ class Client final : public Transport {
     if (connected_) {
       const bool open = stream_.read_some();
       std::size_t consumed = 0;
-      for (;;) {
+      while (!ring_.full()) {  // the rest waits in the socket until the ECU has taken these
         const std::string_view m = stream_.next_message(consumed, counters_.rx_malformed);
         if (m.empty()) break;
         Frame f;
@@ -498,7 +505,7 @@ class Client final : public Transport {
           default: ++counters_.error_frames; break;
         }
       }
-      stream_.drop_consumed(consumed, counters_.rx_malformed);
+      stream_.drop_consumed(consumed, counters_.rx_malformed, ring_.full());
       if (!open || !stream_.flush()) lose();
     }
     return ring_.pop(out);

@@ -4,13 +4,13 @@
 // machines whose kernel has no CAN.
 //   Server (the plant): listens on HOST:PORT and serves one bus. Per client: "< hi >";
 //   "< open CHANNEL >" -> "< ok >"; "< rawmode >" -> "< ok >"; then every frame on the bus
-//   goes to it as "< frame ID SECS.USECS DATA > " and its "< send ID LEN B0 B1 ... >" frames
+//   goes to it as " < frame ID SECS.USECS DATA >" and its "< send ID LEN B0 B1 ... >" frames
 //   reach the plant and the other clients (a bus: everyone hears everyone else).
 //   Client (an ECU): connects, does the handshake, then the same two message kinds.
 // Traps of python-can 4.1's client, measured: each handshake reply must arrive as its own
 // TCP read (sent as its own write with TCP_NODELAY, and no frame to a client until it has
 // had time to read its last "< ok >"); it drops a character after each read, so every
-// message is followed by a space; it reads data only as contiguous hex.
+// frame is preceded by a space; it reads data only as contiguous hex.
 
 #include <cstdint>
 #include <memory>
