@@ -96,6 +96,7 @@ BusEcuResult serve(Controller& ecu, double h_s, io::can::Transport& bus, const B
         sensors.locked = status.locked;
         sensors.stamp = msgs::Stamp{static_cast<double>(status.step) * h_s, status.step, sequence++};
         ecu.update(sensors, command);
+        command.stamp = sensors.stamp;  // the sample it answers: sampleStep on the bus
         std::array<Frame, F::kCommandIds.size()> frames;
         res.saturated += io::can::encode(command, tx, frames);
         for (const Frame& out : frames) bus.send(out);

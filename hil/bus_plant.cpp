@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <ctime>
 #include <span>
@@ -71,6 +72,7 @@ class BusPlant final : public ExternalDriver {
         ratio_(sc.solver.ecu_ratio),
         period_s_(sc.ecu_timing.period_s),
         timeout_s_(opt.command_timeout_s > 0.0 ? opt.command_timeout_s : 3.0 * sc.ecu_timing.period_s),
+        timeout_steps_(static_cast<std::int64_t>(std::floor(timeout_s_ / sc.solver.step_s + 1e-9))),
         filter_(F::kCommandIds),
         pacer_(clock_, static_cast<std::int64_t>(sc.solver.step_s * 1e9)) {
     log_buf_.reserve(2 * kLogFlushBytes);
@@ -132,6 +134,7 @@ class BusPlant final : public ExternalDriver {
     rej.integer("wrong_length", rx.wrong_length);
     rej.integer("bad_counter", rx.bad_counter);
     rej.integer("out_of_range", rx.out_of_range);
+    rej.integer("stale", rx.stale);
     rej.integer("malformed", tc.rx_malformed);
     b.object("rejected", rej);
     b.integer("frames_lost", rx.lost);
@@ -166,7 +169,8 @@ class BusPlant final : public ExternalDriver {
                   "%lld timeouts (%.3f s in the safe state), longest command gap %.3f s\n",
                   bus_.describe().c_str(), opt_.lockstep ? "lockstep" : "wall clock",
                   static_cast<long long>(tc.frames_in), static_cast<long long>(tc.frames_out),
-                  static_cast<long long>(rx.unknown_id + rx.wrong_length + rx.bad_counter + rx.out_of_range + tc.rx_malformed),
+                  static_cast<long long>(rx.unknown_id + rx.wrong_length + rx.bad_counter + rx.out_of_range + rx.stale +
+                                         tc.rx_malformed),
                   static_cast<long long>(commands_applied_), static_cast<long long>(stale_samples_),
                   static_cast<long long>(timeouts_), static_cast<double>(safe_steps_) * h_s_,
                   static_cast<double>(longest_gap_steps_) * h_s_);
@@ -253,7 +257,10 @@ class BusPlant final : public ExternalDriver {
     while (const std::size_t k = bus_.receive(buf)) {
       log_frames(std::span<const Frame>(buf, k));
       for (std::size_t i = 0; i < k; ++i) {
-        if (filter_.accept(buf[i]) != io::can::Reject::kNone) continue;
+        // lockstep: the command of this sample only; wall clock: one no older than the timeout
+        const io::can::Freshness fresh{static_cast<std::uint32_t>(std::max<std::int64_t>(last_sample_, 0)),
+                                       opt_.lockstep ? 0u : static_cast<std::uint32_t>(std::min<std::int64_t>(timeout_steps_, 0xFFFF))};
+        if (filter_.accept(buf[i], &fresh) != io::can::Reject::kNone) continue;
         io::can::apply(buf[i], incoming_);
         for (std::size_t j = 0; j < F::kCommandIds.size(); ++j) {
           if (F::kCommandIds[j] == buf[i].id) received_mask_ |= 1u << j;
@@ -300,6 +307,7 @@ class BusPlant final : public ExternalDriver {
   double h_s_;
   std::int64_t ratio_;
   double period_s_, timeout_s_;
+  std::int64_t timeout_steps_;
   io::can::FrameFilter filter_;
   io::can::TxCounters tx_;
   Command incoming_{}, applied_{};

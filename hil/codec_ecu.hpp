@@ -78,6 +78,7 @@ class CodecEcu {
     }
     const Sensors decoded = through_can(sensors, tx_, saturated_);
     inner_->update(decoded, command);
+    command.stamp = sensors.stamp;  // the sample it answers (sampleStep), as `ehpt ecu` sends it
     command_through_can(command, tx_, saturated_);
   }
   std::int64_t saturated_signals() const { return saturated_; }

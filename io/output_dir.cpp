@@ -31,7 +31,23 @@ std::string errno_text() { return std::strerror(errno); }
 
 // rename that fails with EEXIST instead of replacing whatever is at `to`
 bool rename_no_replace(const std::string& from, const std::string& to) {
-  return ::renameat2(AT_FDCWD, from.c_str(), AT_FDCWD, to.c_str(), RENAME_NOREPLACE) == 0;
+  if (::renameat2(AT_FDCWD, from.c_str(), AT_FDCWD, to.c_str(), RENAME_NOREPLACE) == 0) return true;
+  if (errno != EINVAL) return false;
+  // the filesystem has no RENAME_NOREPLACE (9p, some NFS): a folder's plain rename replaces
+  // at most an empty folder (a full one gives ENOTEMPTY, a file ENOTDIR); a file is linked
+  // (EEXIST if the name is taken) and then unlinked
+  struct stat st {};
+  if (::lstat(from.c_str(), &st) != 0) return false;
+  if (S_ISDIR(st.st_mode)) {
+    if (::lstat(to.c_str(), &st) == 0) {
+      errno = EEXIST;
+      return false;
+    }
+    return ::rename(from.c_str(), to.c_str()) == 0;
+  }
+  if (::link(from.c_str(), to.c_str()) != 0) return false;
+  ::unlink(from.c_str());
+  return true;
 }
 
 bool plain_name(const std::string& n) {

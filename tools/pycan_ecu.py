@@ -110,6 +110,8 @@ def run(bus, dbc, vehicle, strategy, st, max_periods=0, idle_timeout_s=5.0):
             st["last_speed_m_s"] = sensors["speed_m_s"]
             for cmd_name, values in strategy(sensors).items():
                 counter = tx_counter.get(cmd_name, 0)
+                # echo the sample we answer: the plant drops commands for old samples
+                values = dict(values, sampleStep=sig["step"] % 65536)
                 can_id, data = dbc.encode(cmd_name, values, counter)
                 try:
                     bus.send(can.Message(arbitration_id=can_id, data=data, is_extended_id=False))

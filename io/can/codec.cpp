@@ -91,6 +91,7 @@ constexpr bool found(const SignalSpec* s) { return s != nullptr; }
 static_assert(found(kStatusStep) && found(kStatusFault) && found(kStatusLocked) && found(kStatusTimeout));
 
 constexpr SignalSpec kCounter = detail::counter();
+constexpr SignalSpec kSampleStep = detail::sample_step();
 
 // The start of a frame of the contract: id, 8 bytes, its counter.
 std::uint64_t start_frame(std::uint32_t id, TxCounters& tx) {
@@ -222,6 +223,7 @@ int encode(const msgs::PsdCommand& c, TxCounters& tx, std::span<Frame, kPsdComma
   int saturated = 0;
   for (std::size_t i = 0; i < kPsdCommandIds.size(); ++i) {
     std::uint64_t bits = start_frame(kPsdCommandIds[i], tx);
+    put_raw(bits, kSampleStep, c.stamp.step & 0xFFFF);
     saturated += put_fields(bits, kPsdCommandIds[i], c, kPsdCommandFields);
     saturated += put_fields(bits, kPsdCommandIds[i], c, kPsdCommandFlags);
     out[i] = finish_frame(kPsdCommandIds[i], bits);
@@ -230,6 +232,7 @@ int encode(const msgs::PsdCommand& c, TxCounters& tx, std::span<Frame, kPsdComma
 }
 int encode(const msgs::EvCommand& c, TxCounters& tx, std::span<Frame, kEvCommandIds.size()> out) {
   std::uint64_t bits = start_frame(kEvCommand, tx);
+  put_raw(bits, kSampleStep, c.stamp.step & 0xFFFF);
   const int saturated = put_fields(bits, kEvCommand, c, kEvCommandFields);
   out[0] = finish_frame(kEvCommand, bits);
   return saturated;
@@ -242,6 +245,7 @@ const char* reject_name(Reject r) {
     case Reject::kWrongLength: return "wrong_length";
     case Reject::kBadCounter: return "bad_counter";
     case Reject::kOutOfRange: return "out_of_range";
+    case Reject::kStale: return "stale";
   }
   return "?";
 }
@@ -257,6 +261,11 @@ Reject check_frame(const Frame& f, std::span<const std::uint32_t> accepted_ids) 
     if (!raw_in_range(s, get_raw(bits, s))) return Reject::kOutOfRange;
   }
   return Reject::kNone;
+}
+
+std::uint32_t command_age_steps(const Frame& command, std::uint32_t sample_step) {
+  const auto echo = static_cast<std::uint32_t>(get_raw(payload(command), kSampleStep));
+  return (sample_step - echo) & 0xFFFF;
 }
 
 int counter_step(int last_counter, int counter) {
@@ -288,8 +297,12 @@ FrameFilter::FrameFilter(std::span<const std::uint32_t> accepted_ids) {
   last_counter_.fill(-1);
 }
 
-Reject FrameFilter::accept(const Frame& f) {
+Reject FrameFilter::accept(const Frame& f, const Freshness* freshness) {
   Reject r = check_frame(f, std::span<const std::uint32_t>(ids_.data(), count_));
+  if (r == Reject::kNone && freshness != nullptr && find_signal(f.id, "sampleStep") != nullptr &&
+      command_age_steps(f, freshness->sample_step) > freshness->max_age_steps) {
+    r = Reject::kStale;
+  }
   std::size_t slot = 0;
   while (r == Reject::kNone && ids_[slot] != f.id) ++slot;
   if (r == Reject::kNone) {
@@ -308,6 +321,7 @@ Reject FrameFilter::accept(const Frame& f) {
     case Reject::kWrongLength: ++stats_.wrong_length; break;
     case Reject::kBadCounter: ++stats_.bad_counter; break;
     case Reject::kOutOfRange: ++stats_.out_of_range; break;
+    case Reject::kStale: ++stats_.stale; break;
   }
   return r;
 }

@@ -52,13 +52,14 @@ class TxCounters {
 };
 
 // ---- encode: frames in sending order; returns how many signals saturated ----
+// A command's sampleStep is its stamp's step (the sample it answers), mod 2^16.
 int encode(const msgs::PsdSensors& s, const PlantStatus& status, TxCounters& tx, std::span<Frame, kPsdSensorIds.size()> out);
 int encode(const msgs::EvSensors& s, const PlantStatus& status, TxCounters& tx, std::span<Frame, kEvSensorIds.size()> out);
 int encode(const msgs::PsdCommand& c, TxCounters& tx, std::span<Frame, kPsdCommandIds.size()> out);
 int encode(const msgs::EvCommand& c, TxCounters& tx, std::span<Frame, kEvCommandIds.size()> out);
 
 // ---- decode ----
-enum class Reject : std::uint8_t { kNone, kUnknownId, kWrongLength, kBadCounter, kOutOfRange };
+enum class Reject : std::uint8_t { kNone, kUnknownId, kWrongLength, kBadCounter, kOutOfRange, kStale };
 const char* reject_name(Reject r);  // "unknown_id", ...
 
 // Stateless checks: the id is one this side accepts, the length is the contract's, every
@@ -71,6 +72,17 @@ Reject check_frame(const Frame& f, std::span<const std::uint32_t> accepted_ids);
 inline constexpr int kMaxCounterJump = 3;
 // >= 1: accepted, frames lost in between = result - 1; 0: rejected.
 int counter_step(int last_counter, int counter);
+
+// A command's freshness: how many plant steps before `sample_step` (the newest sample sent)
+// the sample it answers is, from its sampleStep echo (mod 2^16). Pure.
+std::uint32_t command_age_steps(const Frame& command, std::uint32_t sample_step);
+// The freshness a receiver of commands asks for: a command older than max_age_steps is
+// rejected as stale before its counter is looked at (so a replayed old frame cannot take the
+// place of a fresh one).
+struct Freshness {
+  std::uint32_t sample_step = 0;    // the newest sample sent
+  std::uint32_t max_age_steps = 0;  // lockstep: 0 (the command of this sample only)
+};
 
 // Applies the signals of an accepted frame to a message; fields of other frames are untouched.
 void apply(const Frame& f, msgs::PsdSensors& s);  // PsdSensors1..6
@@ -85,6 +97,7 @@ struct RxStats {
   std::int64_t wrong_length = 0;
   std::int64_t bad_counter = 0;   // repeated or jumped too far
   std::int64_t out_of_range = 0;  // a signal outside its [min, max]
+  std::int64_t stale = 0;         // a command for a sample older than the freshness allows
   std::int64_t lost = 0;          // frames missing between accepted counters
 };
 
@@ -92,7 +105,8 @@ struct RxStats {
 class FrameFilter {
  public:
   explicit FrameFilter(std::span<const std::uint32_t> accepted_ids);
-  Reject accept(const Frame& f);  // checks, updates counters and stats
+  // checks (with freshness: of commands), updates counters and stats
+  Reject accept(const Frame& f, const Freshness* freshness = nullptr);
   void resync();                  // the stream went stale: the next counter of each id is taken as it is
   const RxStats& stats() const { return stats_; }
 

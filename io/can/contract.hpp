@@ -7,7 +7,7 @@
 // Layout rules of the contract: classic CAN, 11-bit ids, 8-byte frames, little-endian (Intel)
 // signals, a 4-bit rolling counter at bits 60..63 of every frame. Per ECU period the plant
 // sends its sensor frames and then PlantStatus (the end of the sample); the ECU answers with
-// its command frames.
+// its command frames, each echoing the sample's step (sampleStep, mod 2^16).
 
 #include <array>
 #include <cstdint>
@@ -61,12 +61,14 @@ constexpr SignalSpec soc(int at) { return {"batSOC", at, 20, false, 1e-6, 0, 0, 
 constexpr SignalSpec voltage_V(int at) { return {"battery_voltage_V", at, 20, false, 0.001, 0, 0, 1000, "V"}; }
 constexpr SignalSpec current_A(int at) { return {"battery_current_A", at, 20, true, 0.001, 0, -500, 500, "A"}; }
 constexpr SignalSpec flag(std::string_view n, int at) { return {n, at, 1, false, 1, 0, 0, 1, ""}; }
+// every command echoes the step of the sample it answers (its freshness)
+constexpr SignalSpec sample_step() { return {"sampleStep", 44, 16, false, 1, 0, 0, 65535, ""}; }
 
 inline constexpr SignalSpec kPsdCommand1Signals[] = {
-    power_W("icePowRef_W", 0), torque_Nm("iceTauRef_Nm", 20), flag("iceON", 40), counter()};
+    power_W("icePowRef_W", 0), torque_Nm("iceTauRef_Nm", 20), flag("iceON", 40), sample_step(), counter()};
 inline constexpr SignalSpec kPsdCommand2Signals[] = {torque_Nm("genTauRef_Nm", 0), torque_Nm("motTauRef_Nm", 20),
-                                                     counter()};
-inline constexpr SignalSpec kEvCommandSignals[] = {ev_torque_Nm("driveTauRef_Nm", 0), counter()};
+                                                     sample_step(), counter()};
+inline constexpr SignalSpec kEvCommandSignals[] = {ev_torque_Nm("driveTauRef_Nm", 0), sample_step(), counter()};
 inline constexpr SignalSpec kPlantStatusSignals[] = {
     {"step", 0, 32, false, 1, 0, 0, 4294967295.0, ""},
     {"fault", 32, 8, false, 1, 0, 0, 255, ""},

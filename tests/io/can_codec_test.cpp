@@ -270,13 +270,18 @@ TEST(CanContract, DbcMatchesContractSignalBySignal) {
   // the reader really read the lines (values, not only names): a few spot checks
   EXPECT_EQ(dbc.messages[0].name, "PsdCommand1");
   EXPECT_EQ(dbc.messages[0].id, 272u);
-  ASSERT_EQ(dbc.messages[0].signals.size(), 4u);
+  ASSERT_EQ(dbc.messages[0].signals.size(), 5u);
   EXPECT_EQ(dbc.messages[0].signals[1].name, "iceTauRef_Nm");
   EXPECT_EQ(dbc.messages[0].signals[1].start_bit, 20);
   EXPECT_EQ(dbc.messages[0].signals[1].factor, 0.001);
   EXPECT_EQ(dbc.messages[0].signals[1].min, -500.0);
   EXPECT_EQ(dbc.messages[0].signals[1].unit, "Nm");
   EXPECT_EQ(dbc.messages[0].cycle_time_ms, 10);
+  EXPECT_EQ(dbc.messages[0].signals[3].name, "sampleStep");  // the echo of the sample answered
+  EXPECT_EQ(dbc.messages[0].signals[3].start_bit, 44);
+  EXPECT_EQ(dbc.messages[0].signals[3].length, 16);
+  EXPECT_EQ(dbc.messages[0].signals[3].sign, '+');
+  EXPECT_EQ(dbc.messages[0].signals[3].max, 65535.0);
   std::size_t signals = 0;
   for (const DbcMessage& m : dbc.messages) {
     signals += m.signals.size();
@@ -286,7 +291,7 @@ TEST(CanContract, DbcMatchesContractSignalBySignal) {
     EXPECT_EQ(m.signals.back().start_bit, 60) << m.name;
     EXPECT_EQ(m.signals.back().length, 4) << m.name;
   }
-  EXPECT_EQ(signals, 48u);
+  EXPECT_EQ(signals, 51u);
   // the DBC itself obeys the layout rules too (it equals the tables, checked above)
   const std::vector<std::string> problems = layout_problems(kMessages);
   EXPECT_TRUE(problems.empty()) << joined(problems);
@@ -323,6 +328,9 @@ TEST(CanContract, ComparisonReportsEveryKindOfDrift) {
       {" SG_ batSOC : 40|20@1+ (1e-06,0) [0|1] \"\" Ecu\n SG_ counter : 60|4@1+ (1,0) [0|15] \"\" Ecu\n\nBO_ 529",
        " SG_ batSOC : 40|20@1+ (1e-06,0) [0|1] \"\" Ecu\n SG_ counter : 56|4@1+ (1,0) [0|15] \"\" Ecu\n\nBO_ 529",
        "PsdSensors1.counter: start bit 56"},
+      {"sampleStep : 44|16@1+ (1,0) [0|65535] \"\" Plant\n SG_ counter : 60|4@1+ (1,0) [0|15] \"\" Plant\n\nBO_ 512",
+       "sampleStep : 44|15@1+ (1,0) [0|65535] \"\" Plant\n SG_ counter : 60|4@1+ (1,0) [0|15] \"\" Plant\n\nBO_ 512",
+       "EvCommand.sampleStep: length 15"},
       {" SG_ fault : 32|8@1+", " SG_ fault : 32|8@2+", "unreadable SG_"},
   };
   for (const Drift& d : drifts) {
@@ -447,12 +455,14 @@ TEST(CanCodec, TestTablesCoverEverySignal) {
       for (const auto& f : kPsdCommandFields) uses += (f.id == m.id && f.signal == s.name) ? 1 : 0;
       for (const auto& f : kEvCommandFields) uses += (f.id == m.id && f.signal == s.name) ? 1 : 0;
       uses += (m.id == kPsdCommand1 && s.name == "iceON") ? 1 : 0;
+      const bool command = m.id == kPsdCommand1 || m.id == kPsdCommand2 || m.id == kEvCommand;
+      uses += (command && s.name == "sampleStep") ? 1 : 0;  // CanCodec.CommandsEchoTheirStampStep...
       uses += (m.id == kPlantStatus || s.name == "counter") ? 1 : 0;
       EXPECT_EQ(uses, 1) << m.name << "." << s.name;
       covered += uses;
     }
   }
-  EXPECT_EQ(covered, 48);
+  EXPECT_EQ(covered, 51);
 }
 
 // Decodes frames as the receiving side does: filter first, apply only what it accepts.
@@ -549,27 +559,89 @@ TEST(CanCodec, EvSensorsRoundTripEveryFieldWithinHalfAStep) {
   }
 }
 
+// The payload of a frame and a command's sampleStep (bits 44..59), read here, not by the codec.
+std::uint64_t payload_bits(const Frame& f) {
+  std::uint64_t bits = 0;
+  for (std::size_t i = 0; i < 8; ++i) bits |= static_cast<std::uint64_t>(f.data[i]) << (8 * i);
+  return bits;
+}
+std::uint32_t sample_step_of(const Frame& f) { return static_cast<std::uint32_t>((payload_bits(f) >> 44) & 0xFFFF); }
+
 TEST(CanCodec, CommandsRoundTripEveryFieldWithinHalfAStepAndFlagsExactly) {
   std::mt19937_64 rng(99);
   int n = 0;
   for (Pick pick : kPicks) {
     msgs::PsdCommand in = fill(kPsdCommandFields, pick, rng);
     in.iceON = (n++ % 2) == 0;
+    in.stamp.step = static_cast<std::int64_t>(rng() >> 20);  // up to 2^44: the echo keeps 16 bits
     TxCounters tx;
     std::array<Frame, kPsdCommandIds.size()> frames;
     EXPECT_EQ(encode(in, tx, frames), 0);
+    for (const Frame& f : frames) {
+      EXPECT_EQ(sample_step_of(f), static_cast<std::uint32_t>(in.stamp.step % 65536)) << std::hex << f.id;
+    }
     msgs::PsdCommand out{};
     out.iceON = !in.iceON;
     receive_all<msgs::PsdCommand, kPsdCommandIds.size()>(frames, kPsdCommandIds, out);
     expect_fields_near(kPsdCommandFields, in, out, "PsdCommand");
     EXPECT_EQ(out.iceON, in.iceON);
 
-    const msgs::EvCommand ev = fill(kEvCommandFields, pick, rng);
+    msgs::EvCommand ev = fill(kEvCommandFields, pick, rng);
+    ev.stamp.step = static_cast<std::int64_t>(rng() >> 20);
     std::array<Frame, 1> ev_frames;
     EXPECT_EQ(encode(ev, tx, ev_frames), 0);
+    EXPECT_EQ(sample_step_of(ev_frames[0]), static_cast<std::uint32_t>(ev.stamp.step % 65536));
     msgs::EvCommand ev_out{};
     receive_all<msgs::EvCommand, 1>(ev_frames, kEvCommandIds, ev_out);
     expect_fields_near(kEvCommandFields, ev, ev_out, "EvCommand");
+  }
+}
+
+// Every command frame carries stamp.step mod 2^16 at bits 44..59 (sampleStep), next to fields
+// whose raw bits are all set and without touching them or the counter.
+TEST(CanCodec, CommandsEchoTheirStampStepModulo65536) {
+  const struct {
+    std::int64_t step;
+    std::uint32_t echo;
+  } cases[] = {{0, 0u},           {1, 1u},        {65535, 65535u}, {65536, 0u}, {123456, 123456u & 0xFFFFu},
+               {65537, 1u},       {0xABCD, 0xABCDu}, {0xFFFFFFFFLL, 0xFFFFu}, {0x123456789ALL, 0x789Au}};
+  EXPECT_EQ(123456u & 0xFFFFu, 57920u);
+  int n = 0;
+  for (const auto& c : cases) {
+    msgs::PsdCommand psd{};
+    psd.stamp.step = c.step;
+    psd.icePowRef_W = -0.5;     // raw -1: all 20 bits set
+    psd.iceTauRef_Nm = -0.001;  // raw -1
+    psd.genTauRef_Nm = -0.001;
+    psd.motTauRef_Nm = -0.001;
+    psd.iceON = true;
+    msgs::EvCommand ev{};
+    ev.stamp.step = c.step;
+    ev.driveTauRef_Nm = -0.01;  // raw -1
+    TxCounters tx;
+    for (int i = 0; i < n % 16; ++i) tx.take(kEvCommand);  // a counter other than 0 as well
+    std::array<Frame, kPsdCommandIds.size()> frames;
+    std::array<Frame, 1> ev_frames;
+    ASSERT_EQ(encode(psd, tx, frames), 0);
+    ASSERT_EQ(encode(ev, tx, ev_frames), 0);
+    const Frame all[] = {frames[0], frames[1], ev_frames[0]};
+    const std::uint64_t others[] = {
+        0xFFFFFULL | (0xFFFFFULL << 20) | (1ULL << 40),  // icePowRef_W, iceTauRef_Nm, iceON
+        0xFFFFFULL | (0xFFFFFULL << 20),                 // genTauRef_Nm, motTauRef_Nm
+        0xFFFFFULL,                                      // driveTauRef_Nm
+    };
+    const std::uint64_t counters[] = {0, 0, static_cast<std::uint64_t>(n % 16)};
+    for (std::size_t i = 0; i < 3; ++i) {
+      const std::uint64_t want = others[i] | (static_cast<std::uint64_t>(c.echo) << 44) | (counters[i] << 60);
+      EXPECT_EQ(payload_bits(all[i]), want) << std::hex << all[i].id << " step " << std::dec << c.step;
+      EXPECT_EQ(sample_step_of(all[i]), c.echo) << c.step;
+      EXPECT_EQ(check_frame(all[i], i < 2 ? std::span<const std::uint32_t>(kPsdCommandIds)
+                                          : std::span<const std::uint32_t>(kEvCommandIds)),
+                Reject::kNone);
+      EXPECT_EQ(command_age_steps(all[i], c.echo), 0u) << c.step;
+      EXPECT_EQ(command_age_steps(all[i], static_cast<std::uint32_t>(c.step)), 0u) << c.step;  // the full step
+    }
+    ++n;
   }
 }
 
@@ -831,6 +903,10 @@ TEST(CanDecode, CheckFrameNamesEachReason) {
   EXPECT_STREQ(reject_name(Reject::kBadCounter), "bad_counter");
   EXPECT_STREQ(reject_name(Reject::kUnknownId), "unknown_id");
   EXPECT_STREQ(reject_name(Reject::kWrongLength), "wrong_length");
+  EXPECT_STREQ(reject_name(Reject::kStale), "stale");
+  // every sampleStep is in range (16 unsigned bits, [0, 65535])
+  EXPECT_EQ(check_frame(frame_of(kEvCommand, field_bits(0xFFFF, 44, 16)), kEvCommandIds), Reject::kNone);
+  EXPECT_EQ(check_frame(frame_of(kPsdCommand2, field_bits(0xFFFF, 44, 16)), kPsdCommandIds), Reject::kNone);
 }
 
 TEST(CanDecode, CounterRuleAcceptsJumpsOfOneToThree) {
@@ -938,6 +1014,139 @@ TEST(CanDecode, FilterCountsEveryReasonAndRejectedFramesChangeNothing) {
   EXPECT_EQ(s.out_of_range, 2);
 }
 
+// ---------------------------------------------------------------------------------------------
+// Freshness: a command echoes the step of the sample it answers (sampleStep, mod 2^16).
+
+// A command frame built by hand: its sampleStep echo and counter, nothing else.
+Frame command_with_echo(std::uint32_t id, std::uint32_t echo, int counter) {
+  return frame_of(id, field_bits(echo, 44, 16) | field_bits(counter, 60, 4));
+}
+
+TEST(CanFreshness, CommandAgeIsTheSampleMinusTheEchoModulo65536) {
+  const struct {
+    std::uint32_t sample, echo, age;
+  } cases[] = {
+      {0, 0, 0},          {7, 7, 0},         {8, 7, 1},           {7, 8, 65535},  // one ahead: as old as can be
+      {3, 65534, 5},      {0, 65535, 1},     {65535, 0, 65535},   {65535, 65535, 0},
+      {65536, 0, 0},      {65536 + 10, 10, 0}, {65536 + 10, 9, 1}, {123456, 57920, 0},  // the full step
+      {0xFFFFFFFFu, 0xFFFF, 0}, {0xFFFFFFFFu, 0xFFF0, 15}, {2, 0xFFFF, 3}, {1000, 0, 1000},
+  };
+  for (const auto& c : cases) {
+    for (std::uint32_t id : {kPsdCommand1, kPsdCommand2, kEvCommand}) {
+      for (int counter : {0, 9, 15}) {
+        EXPECT_EQ(command_age_steps(command_with_echo(id, c.echo, counter), c.sample), c.age)
+            << std::hex << id << std::dec << " sample " << c.sample << " echo " << c.echo;
+      }
+    }
+  }
+  // the other fields do not move it: a full encoded command
+  msgs::EvCommand ev{};
+  ev.stamp.step = 65534;
+  ev.driveTauRef_Nm = -5000.0;
+  TxCounters tx;
+  std::array<Frame, 1> f;
+  encode(ev, tx, f);
+  EXPECT_EQ(command_age_steps(f[0], 65536 + 3), 5u);
+  EXPECT_EQ(command_age_steps(f[0], 65534), 0u);
+  // by hand: sampleStep 0xFFFE = bytes 5..7 E0 FF 0F (counter 0)
+  Frame hand = frame_of(kEvCommand, 0);
+  hand.data = {0, 0, 0, 0, 0, 0xE0, 0xFF, 0x0F};
+  EXPECT_EQ(command_age_steps(hand, 3), 5u);
+}
+
+TEST(CanFreshness, FilterRejectsStaleCommandsBeforeTheirCounter) {
+  FrameFilter filter(kEvCommandIds);
+  Freshness fresh{100, 0};  // lockstep: only the command for sample 100
+  EXPECT_EQ(filter.accept(command_with_echo(kEvCommand, 100, 4), &fresh), Reject::kNone);  // age 0, max 0
+  // age 1 with max 0: stale, counted, and the counter state stays at 4
+  fresh.sample_step = 101;
+  EXPECT_EQ(filter.accept(command_with_echo(kEvCommand, 100, 5), &fresh), Reject::kStale);
+  EXPECT_EQ(filter.stats().stale, 1);
+  EXPECT_EQ(filter.stats().accepted, 1);
+  EXPECT_EQ(filter.stats().bad_counter, 0);
+  EXPECT_EQ(filter.stats().lost, 0);
+  // the fresh frame with the same counter 5 (c + 1) is accepted, nothing lost
+  EXPECT_EQ(filter.accept(command_with_echo(kEvCommand, 101, 5), &fresh), Reject::kNone);
+  EXPECT_EQ(filter.stats().lost, 0);
+  EXPECT_EQ(filter.stats().accepted, 2);
+  // a stale replay whose counter would be a repeat is stale, not a bad counter
+  EXPECT_EQ(filter.accept(command_with_echo(kEvCommand, 90, 5), &fresh), Reject::kStale);
+  // a command for a sample not sent yet (age 65535) is stale too
+  EXPECT_EQ(filter.accept(command_with_echo(kEvCommand, 102, 6), &fresh), Reject::kStale);
+  EXPECT_EQ(filter.stats().stale, 3);
+  EXPECT_EQ(filter.stats().bad_counter, 0);
+
+  // age <= max_age_steps is accepted, age max + 1 is not; across the 2^16 wrap
+  fresh = Freshness{65536 + 2, 3};
+  EXPECT_EQ(filter.accept(command_with_echo(kEvCommand, 65535, 6), &fresh), Reject::kNone);  // age 3
+  EXPECT_EQ(filter.accept(command_with_echo(kEvCommand, 65534, 7), &fresh), Reject::kStale);  // age 4
+  EXPECT_EQ(filter.accept(command_with_echo(kEvCommand, 0, 7), &fresh), Reject::kNone);       // age 2
+  EXPECT_EQ(filter.accept(command_with_echo(kEvCommand, 1, 8), &fresh), Reject::kNone);       // age 1
+  EXPECT_EQ(filter.accept(command_with_echo(kEvCommand, 2, 9), &fresh), Reject::kNone);       // age 0
+  RxStats s = filter.stats();
+  EXPECT_EQ(s.accepted, 6);
+  EXPECT_EQ(s.stale, 4);
+  EXPECT_EQ(s.lost, 0);
+  EXPECT_EQ(s.bad_counter, 0);
+  // without a Freshness the echo is not looked at
+  EXPECT_EQ(filter.accept(command_with_echo(kEvCommand, 40000, 10)), Reject::kNone);
+  // the other checks come first: a stale frame of a wrong length is wrong_length
+  Frame short_stale = command_with_echo(kEvCommand, 0, 11);
+  short_stale.len = 7;
+  EXPECT_EQ(filter.accept(short_stale, &fresh), Reject::kWrongLength);
+  s = filter.stats();
+  EXPECT_EQ(s.accepted, 7);
+  EXPECT_EQ(s.stale, 4);
+  EXPECT_EQ(s.wrong_length, 1);
+
+  // both PSD command frames, each with its own counter; encoded by the codec
+  FrameFilter psd(kPsdCommandIds);
+  TxCounters tx;
+  std::array<Frame, 2> frames;
+  msgs::PsdCommand c{};
+  for (std::int64_t step = 65530; step < 65545; ++step) {
+    c.stamp.step = step;
+    encode(c, tx, frames);
+    const Freshness now{static_cast<std::uint32_t>(step), 0};
+    const Freshness next{static_cast<std::uint32_t>(step + 1), 0};
+    EXPECT_EQ(psd.accept(frames[0], &next), Reject::kStale) << step;  // a sample late
+    EXPECT_EQ(psd.accept(frames[0], &now), Reject::kNone) << step;
+    EXPECT_EQ(psd.accept(frames[1], &next), Reject::kStale) << step;
+    EXPECT_EQ(psd.accept(frames[1], &now), Reject::kNone) << step;
+  }
+  EXPECT_EQ(psd.stats().accepted, 30);
+  EXPECT_EQ(psd.stats().stale, 30);
+  EXPECT_EQ(psd.stats().lost, 0);
+  EXPECT_EQ(psd.stats().bad_counter, 0);
+}
+
+// Sensor frames and PlantStatus have no sampleStep: never stale, whatever their bits 44..59.
+TEST(CanFreshness, FramesWithoutSampleStepAreNeverStale) {
+  const Freshness strict{12345, 0};
+  std::mt19937_64 rng(5);
+  FrameFilter psd(kPsdSensorIds), ev(kEvSensorIds);
+  TxCounters tx;
+  for (int i = 0; i < 20; ++i) {
+    const msgs::PsdSensors ps = fill(kPsdSensorFields, Pick::kRandom, rng);
+    const msgs::EvSensors es = fill(kEvSensorFields, Pick::kRandom, rng);
+    const PlantStatus st{static_cast<std::uint32_t>(rng()), 0xA5u, true, true};  // step, fault at 44..59: no
+    std::array<Frame, kPsdSensorIds.size()> pf;
+    std::array<Frame, kEvSensorIds.size()> ef;
+    encode(ps, st, tx, pf);
+    encode(es, st, tx, ef);
+    for (const Frame& f : pf) EXPECT_EQ(psd.accept(f, &strict), Reject::kNone) << std::hex << f.id;
+    for (const Frame& f : ef) EXPECT_EQ(ev.accept(f, &strict), Reject::kNone) << std::hex << f.id;
+  }
+  // a sensor frame whose bits 44..59 would be an old echo (batSOC raw 0x12340 at 40..59: 0x1234)
+  FrameFilter one(kEvSensorIds);
+  const Frame soc = frame_of(kEvSensors1, field_bits(0x12340, 40, 20));
+  EXPECT_EQ(check_frame(soc, kEvSensorIds), Reject::kNone);
+  EXPECT_EQ(one.accept(soc, &strict), Reject::kNone);
+  EXPECT_EQ(psd.stats().stale + ev.stats().stale + one.stats().stale, 0);
+  EXPECT_EQ(psd.stats().accepted, 140);
+  EXPECT_EQ(ev.stats().accepted, 80);
+}
+
 TEST(CanDecode, TxCountersCountPerIdModuloSixteen) {
   TxCounters tx;
   std::array<Frame, 1> ev;
@@ -960,7 +1169,7 @@ TEST(CanDecode, TxCountersCountPerIdModuloSixteen) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Golden frames: tests/data/can/golden_frames.log (how it was made and three frames computed
+// Golden frames: tests/data/can/golden_frames.log (how it was made and four frames computed
 // by hand: tests/data/can/README.md).
 
 struct GoldenSet {
@@ -1006,7 +1215,9 @@ GoldenSet golden_values() {
   g.psd_cmd.genTauRef_Nm = -45.678;
   g.psd_cmd.motTauRef_Nm = 210.001;
   g.psd_cmd.iceON = true;
+  g.psd_cmd.stamp.step = 305419896;  // answers the PSD sample (0x12345678): sampleStep 0x5678
   g.ev_cmd.driveTauRef_Nm = 12.34;
+  g.ev_cmd.stamp.step = 175053;  // 0x2ABCD: sampleStep 0xABCD (mod 2^16)
   return g;
 }
 
@@ -1061,8 +1272,8 @@ TEST(CanGolden, FramesMatchTheGoldenLog) {
   ASSERT_EQ(got.size(), 14u);
   EXPECT_EQ(got[7], "(1700000000.007000) vcan0 220#1EFB0F350C706408");   // EvSensors1
   EXPECT_EQ(got[10], "(1700000000.010000) vcan0 200#FFFFFFFF08020010");  // PlantStatus, counter 1
-  EXPECT_EQ(got[11], "(1700000000.011000) vcan0 110#61EA60A4E2010000");  // PsdCommand1
-  EXPECT_EQ(got[13], "(1700000000.013000) vcan0 120#D204000000000000");  // EvCommand
+  EXPECT_EQ(got[11], "(1700000000.011000) vcan0 110#61EA60A4E2816705");  // PsdCommand1, sampleStep 0x5678
+  EXPECT_EQ(got[13], "(1700000000.013000) vcan0 120#D204000000D0BC0A");  // EvCommand, sampleStep 0xABCD
 }
 
 TEST(CanGolden, GoldenLinesParseAndDecodeToTheOriginalValues) {
@@ -1110,6 +1321,14 @@ TEST(CanGolden, GoldenLinesParseAndDecodeToTheOriginalValues) {
   msgs::EvCommand ev_cmd{};
   receive_all<msgs::EvCommand, 1>(std::span<const Frame, 1>(frames.data() + 13, 1), kEvCommandIds, ev_cmd);
   EXPECT_NEAR(ev_cmd.driveTauRef_Nm, 12.34, 1e-9);
+  // the sampleStep echoes: each command is fresh for its own sample only
+  for (std::size_t i : {std::size_t{11}, std::size_t{12}}) {
+    EXPECT_EQ(sample_step_of(frames[i]), 0x5678u) << lines[i];
+    EXPECT_EQ(command_age_steps(frames[i], 305419896u), 0u) << lines[i];
+    EXPECT_EQ(command_age_steps(frames[i], 305419897u), 1u) << lines[i];
+  }
+  EXPECT_EQ(sample_step_of(frames[13]), 0xABCDu);
+  EXPECT_EQ(command_age_steps(frames[13], 175053u), 0u);
   // the hand-computed values: exact raws
   EXPECT_NEAR(ev.driverRequest_Nm, -12.5, 1e-9);
   EXPECT_NEAR(ev.batSOC, 0.55, 1e-12);

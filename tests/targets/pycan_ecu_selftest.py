@@ -41,6 +41,13 @@ class DbcTest(unittest.TestCase):
             self.assertEqual(m.length, 8, m.name)
             counter = [s for s in m.signals if s.name == "counter"]
             self.assertEqual([(s.start, s.length, s.signed) for s in counter], [(60, 4, False)], m.name)
+            # every command echoes the step of the sample it answers; plant frames do not
+            echo = [(s.start, s.length, s.signed, s.factor, s.minimum, s.maximum) for s in m.signals
+                    if s.name == "sampleStep"]
+            want = [(44, 16, False, 1.0, 0.0, 65535.0)] if m.sender == "Ecu" else []
+            self.assertEqual(echo, want, m.name)
+        self.assertEqual(sorted(m.name for m in DBC.by_id.values() if m.sender == "Ecu"),
+                         ["EvCommand", "PsdCommand1", "PsdCommand2"])
 
     def test_round_trip_every_signal(self):
         rng = random.Random(1)
@@ -63,7 +70,12 @@ class DbcTest(unittest.TestCase):
 
     def test_golden_frames(self):
         # Written out by hand from the DBC, so that an encoder and decoder wrong in the same way fail.
-        cases = [("EvCommand", {"driveTauRef_Nm": -12.5}, 3, 288, "1efb0f0000000030"),
+        # EvCommand: sampleStep 0x1234 at bits 44..59 -> byte 5 0x40, byte 6 0x23, byte 7 0x01 | counter 3 << 4.
+        # The second is line 14 of tests/data/can/golden_frames.log (the C++ codec's): 0xABCD -> D0 BC 0A.
+        cases = [("EvCommand", {"driveTauRef_Nm": -12.5, "sampleStep": 0x1234}, 3, 288, "1efb0f0000402331"),
+                 ("EvCommand", {"driveTauRef_Nm": 12.34, "sampleStep": 0xABCD}, 0, 288, "d204000000d0bc0a"),
+                 ("PsdCommand1", {"icePowRef_W": 30000.5, "iceTauRef_Nm": -120.25, "iceON": 1, "sampleStep": 0x5678},
+                  0, 272, "61ea60a4e2816705"),
                  ("PlantStatus", {"step": 0x01020304, "fault": 0x55, "locked": 1, "ecuTimeout": 1}, 10,
                   512, "04030201550300a0"),
                  ("PsdSensors1", {"driverRequest": 1.0, "speed_m_s": -0.0002, "batSOC": 0.5}, 0,
@@ -95,9 +107,11 @@ class DbcTest(unittest.TestCase):
                  (lambda: DBC.decode(288, bytes(7)), "7 data bytes"),
                  (lambda: DBC.decode(288, bytes(9)), "9 data bytes"),
                  (lambda: DBC.encode("NoSuchMessage", {}, 0), "unknown message"),
-                 (lambda: DBC.encode("EvCommand", {}, 0), "missing ['driveTauRef_Nm']"),
-                 (lambda: DBC.encode("EvCommand", {"driveTauRef_Nm": 1, "x": 2}, 0), "unknown signals ['x']"),
-                 (lambda: DBC.encode("EvCommand", {"driveTauRef_Nm": 1}, 16), "counter 16")]
+                 (lambda: DBC.encode("EvCommand", {}, 0), "missing ['driveTauRef_Nm', 'sampleStep']"),
+                 (lambda: DBC.encode("EvCommand", {"driveTauRef_Nm": 1}, 0), "missing ['sampleStep']"),
+                 (lambda: DBC.encode("EvCommand", {"driveTauRef_Nm": 1, "sampleStep": 0, "x": 2}, 0),
+                  "unknown signals ['x']"),
+                 (lambda: DBC.encode("EvCommand", {"driveTauRef_Nm": 1, "sampleStep": 0}, 16), "counter 16")]
         for call, text in cases:
             with self.assertRaises(ValueError) as ctx:
                 call()
@@ -118,7 +132,9 @@ class StrategyTest(unittest.TestCase):
         def step(traction_W, iceW, request=0.5):
             cmd = ecu({"driverRequest": request, "motPowDelB_W": traction_W, "iceW_rad_s": iceW})
             for name, values in cmd.items():
-                DBC.encode(name, values, 0)  # every command signal exists in the DBC
+                # every command signal exists in the DBC; the echo is the ECU loop's, not the strategy's
+                self.assertNotIn("sampleStep", values)
+                DBC.encode(name, {**values, "sampleStep": 0}, 0)
             return {**cmd["PsdCommand1"], **cmd["PsdCommand2"]}
 
         c = step(3000.0, 0.0)  # low power: engine off, gen holds 125 rad/s, mot follows the driver
@@ -148,6 +164,7 @@ class FakePlant:
         self.bus.send(can.Message(arbitration_id=can_id, data=data, is_extended_id=False))
 
     def sample(self, step, sensors, want, timeout_s=1.0):
+        """-> {command name: signals}. Every command must echo this sample's step mod 65536."""
         self.bus.send(can.Message(arbitration_id=0x100, data=bytes(8), is_extended_id=False))  # foreign traffic
         self.bus.send(can.Message(arbitration_id=288, data=bytes(3), is_extended_id=False))  # malformed
         for name in pycan_ecu.SENSOR_FRAMES[self.vehicle]:
@@ -160,6 +177,9 @@ class FakePlant:
             if msg is not None:
                 name, sig = DBC.decode(msg.arbitration_id, msg.data)
                 self.assertIn_(name, want)
+                if sig["sampleStep"] != step % 65536:
+                    raise AssertionError(f"{name} answers sample {sig['sampleStep']}, "
+                                         f"not {step % 65536} (step {step} mod 65536)")
                 got[name] = sig
         return got
 
@@ -180,7 +200,7 @@ def quantized(message_names, values):
 
 
 class EndToEndTest(unittest.TestCase):
-    def run_ecu(self, vehicle, periods, make_sensors, commands, extra_args=()):
+    def run_ecu(self, vehicle, periods, make_sensors, commands, extra_args=(), first_step=0):
         channel = f"pycan_selftest_{os.getpid()}_{vehicle}"
         plant = FakePlant(channel, vehicle)
         args = ["--interface", "virtual", "--channel", channel, "--vehicle", vehicle,
@@ -193,13 +213,15 @@ class EndToEndTest(unittest.TestCase):
 
         thread = threading.Thread(target=ecu, daemon=True)
         thread.start()
-        answers, step, rng = [], 0, random.Random(2)
+        answers, step, rng = [], first_step, random.Random(2)
         deadline = time.monotonic() + 10
         while len(answers) < periods and time.monotonic() < deadline:
             sensors = make_sensors(rng)
             got = plant.sample(step, sensors, commands, timeout_s=0.3 if not answers else 2.0)
             if got:  # the first samples may go out before the ECU's bus exists
                 self.assertEqual(sorted(got), sorted(commands))
+                for name in commands:  # checked in FakePlant.sample too; here so that it cannot be lost
+                    self.assertEqual(got[name]["sampleStep"], step % 65536, f"{name} at step {step}")
                 answers.append((sensors, got))
                 step += 1
         thread.join(10)
@@ -219,9 +241,16 @@ class EndToEndTest(unittest.TestCase):
             return {"driverRequest_Nm": rng.uniform(-3000, 3000), "speed_m_s": rng.uniform(0, 40),
                     "batSOC": 0.6, "driveW_rad_s": 100.0, "driveTauLim_Nm": 2500.0, "drivePowDel_W": 1e4,
                     "batPowDel_W": 1e4, "battery_voltage_V": 350.0, "battery_current_A": 30.0}
-        for sens, got in self.run_ecu("ev", 20, sensors, ["EvCommand"]):
+        # steps 65526..65545: the echo wraps from 65535 to 0 half way
+        answers = self.run_ecu("ev", 20, sensors, ["EvCommand"], first_step=65526)
+        self.assertEqual([got["EvCommand"]["sampleStep"] for _, got in answers],
+                         list(range(65526, 65536)) + list(range(0, 10)))
+        for sens, got in answers:
             self.assertAlmostEqual(got["EvCommand"]["driveTauRef_Nm"], sens["driverRequest_Nm"], delta=0.0051)
-        for sens, got in self.run_ecu("ev", 5, sensors, ["EvCommand"], ["--torque-limit-Nm", "1000"]):
+        # the last steps before PlantStatus.step itself wraps (2^32 - 1)
+        for sens, got in self.run_ecu("ev", 5, sensors, ["EvCommand"], ["--torque-limit-Nm", "1000"],
+                                      first_step=2**32 - 5):
+            self.assertIn(got["EvCommand"]["sampleStep"], range(65531, 65536))
             want = max(-1000, min(1000, sens["driverRequest_Nm"]))
             self.assertAlmostEqual(got["EvCommand"]["driveTauRef_Nm"], want, delta=0.0051)
 
@@ -231,7 +260,7 @@ class EndToEndTest(unittest.TestCase):
 
         def sensors(rng):
             return {s.name: rng.uniform(s.minimum, s.maximum) * 0.1 for s in signals}
-        answers = self.run_ecu("psd", 20, sensors, ["PsdCommand1", "PsdCommand2"])
+        answers = self.run_ecu("psd", 20, sensors, ["PsdCommand1", "PsdCommand2"], first_step=3 * 65536 + 12345)
         reference = pycan_ecu.PsdDemoStrategy()  # the same strategy fed what the ECU saw
         for sens, got in answers:
             want = reference(quantized(names, sens))
@@ -263,7 +292,8 @@ class EndToEndTest(unittest.TestCase):
             sensors["driverRequest_Nm"] = 10.0 * k - 50
             frames = [DBC.encode(n, {s.name: sensors[s.name] for s in DBC.by_name[n].signals if s.name != "counter"},
                                  k % 16) for n in ("EvSensors1", "EvSensors2", "EvSensors3")]
-            frames.append(DBC.encode("PlantStatus", {"step": 100 + k, "fault": 0, "locked": 0, "ecuTimeout": 0}, k % 16))
+            frames.append(DBC.encode("PlantStatus", {"step": 65526 + k, "fault": 0, "locked": 0, "ecuTimeout": 0},
+                                     k % 16))
             conn.sendall(b"".join(f" < frame {i:X} {time.time():.6f} {d.hex().upper()} >".encode() for i, d in frames))
             while b">" not in buf:
                 buf += conn.recv(1000)
@@ -272,13 +302,14 @@ class EndToEndTest(unittest.TestCase):
             self.assertEqual((word, int(can_id, 16), int(length, 16)), ("send", 288, 8))
             sig = DBC.decode(288, bytes(int(b, 16) for b in data))[1]
             self.assertAlmostEqual(sig["driveTauRef_Nm"], 10.0 * k - 50, delta=0.0051)
+            self.assertEqual(sig["sampleStep"], (65526 + k) % 65536)
             counters.append(sig["counter"])
         out, err = proc.communicate(timeout=10)
         conn.close()
         srv.close()
         self.assertEqual(proc.returncode, 0, err)
         self.assertEqual(counters, [k % 16 for k in range(20)])
-        self.assertIn("20 samples answered, last step 119, last speed 2.5000 m/s", out)
+        self.assertIn("20 samples answered, last step 65545, last speed 2.5000 m/s", out)
 
     def test_ctrl_c(self):
         proc = subprocess.Popen([sys.executable, str(ROOT / "tools" / "pycan_ecu.py"), "--interface", "virtual",
