@@ -97,7 +97,9 @@ class BusPlant final : public ExternalDriver {
           wait_for_command(sim, n, stop);
         }
         check_staleness(sim, n);
-        const std::int64_t k = std::min({ratio_ - n % ratio_, sim.total_steps() - n, std::max<std::int64_t>(end - n, 0)});
+        std::int64_t k = std::min({ratio_ - n % ratio_, sim.total_steps() - n, std::max<std::int64_t>(end - n, 0)});
+        // a command that times out within this period does so at its step, not the next sample
+        if (!safe_ && timeout_step() > n) k = std::min(k, timeout_step() - n);
         sim.step(k);
         if (k == 0 && !sim.finished()) return;  // the chunk is full: the rows go out first
       } else {
@@ -143,7 +145,7 @@ class BusPlant final : public ExternalDriver {
     b.integer("commands_applied", commands_applied_);
     b.integer("stale_samples", stale_samples_);
     b.integer("timeouts", timeouts_);
-    b.number("safe_state_time_s", static_cast<double>(safe_steps_) * h_s_);
+    b.number("safe_state_time_s", static_cast<double>(safe_steps()) * h_s_);
     b.number("longest_command_gap_s", static_cast<double>(longest_gap_steps_) * h_s_);
     b.integer("saturated_signals", saturated_);
     b.integer("peers_connected", tc.peers_connected);
@@ -172,7 +174,7 @@ class BusPlant final : public ExternalDriver {
                   static_cast<long long>(rx.unknown_id + rx.wrong_length + rx.bad_counter + rx.out_of_range + rx.stale +
                                          tc.rx_malformed),
                   static_cast<long long>(commands_applied_), static_cast<long long>(stale_samples_),
-                  static_cast<long long>(timeouts_), static_cast<double>(safe_steps_) * h_s_,
+                  static_cast<long long>(timeouts_), static_cast<double>(safe_steps()) * h_s_,
                   static_cast<double>(longest_gap_steps_) * h_s_);
     text += buf;
     std::snprintf(buf, sizeof buf, "bus timing    %s p50 %.0f us, p99 %.0f us, max %.0f us\n",
@@ -182,6 +184,9 @@ class BusPlant final : public ExternalDriver {
   }
 
  private:
+  // steps spent in the safe state (up to the last one seen, if still in it)
+  std::int64_t safe_steps() const { return safe_steps_ + (safe_ ? last_step_ - safe_since_step_ : 0); }
+
   void wait_for_peer(const std::atomic<int>* stop) {
     const std::int64_t deadline = now_ns() + static_cast<std::int64_t>(opt_.peer_wait_s * 1e9);
     while (!bus_.has_peer() && now_ns() < deadline) {
@@ -282,19 +287,23 @@ class BusPlant final : public ExternalDriver {
     command_since_sample_ = true;
     longest_gap_steps_ = std::max(longest_gap_steps_, n - last_command_step_);
     last_command_step_ = n;
-    safe_ = false;  // fresh commands end the safe state
+    if (safe_) safe_steps_ += n - safe_since_step_;  // fresh commands end the safe state
+    safe_ = false;
   }
 
+  // The first step at which the held command is older than the timeout.
+  std::int64_t timeout_step() const { return last_command_step_ + timeout_steps_ + 1; }
+
   void check_staleness(Simulation& sim, std::int64_t n) {
+    last_step_ = n;
     if (safe_) {
-      ++safe_steps_;
       longest_gap_steps_ = std::max(longest_gap_steps_, n - last_command_step_);
       return;
     }
-    if (static_cast<double>(n - last_command_step_) * h_s_ <= timeout_s_ + 1e-12) return;
+    if (n < timeout_step()) return;
     safe_ = true;
+    safe_since_step_ = n;
     ++timeouts_;
-    ++safe_steps_;
     Command safe = applied_;
     F::make_safe(safe);
     sim.write_command(safe);
@@ -315,7 +324,7 @@ class BusPlant final : public ExternalDriver {
   bool started_ = false, safe_ = false, command_since_sample_ = false;
   std::int64_t last_sample_ = -1, last_command_step_ = 0, sent_ns_ = 0;
   std::int64_t commands_applied_ = 0, stale_samples_ = 0, timeouts_ = 0, safe_steps_ = 0, longest_gap_steps_ = 0;
-  std::int64_t saturated_ = 0, waits_timed_out_ = 0;
+  std::int64_t saturated_ = 0, waits_timed_out_ = 0, safe_since_step_ = 0, last_step_ = 0;
   SteadyClock clock_;
   WallClock<SteadyClock> pacer_;
   MicrosecondHistogram round_trip_, period_error_;

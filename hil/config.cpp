@@ -173,12 +173,13 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
       steps = ratio >= 0.0 && ratio < 1e9 ? std::llround(ratio) : -1;
       if (steps < 0 || std::abs(ratio - static_cast<double>(steps)) > 1e-9 * std::max(1.0, ratio)) {
         const auto at = ctx.where.find(field);
-        if (at == ctx.where.end()) {  // not written anywhere: the default period
+        const bool by_default = at == ctx.where.end() || at->second.ends_with("(default)");
+        if (by_default && std::string_view(field) == "ecu.period_s") {  // not written anywhere
           ctx.error(ctx.where["solver.step_s"], field, io::number_text(value_s),
                     "the default ECU period (the bus cycle time) is not a whole multiple of solver.step_s = " +
                         io::number_text(h) + "; set vehicle.ecu.period_s to one (0: every step)");
         } else {
-          ctx.error(at->second, field, io::number_text(value_s),
+          ctx.error(ctx.where[field], field, io::number_text(value_s),
                     "must be a whole multiple of solver.step_s = " + io::number_text(h) + " (and >= 0)");
         }
       }

@@ -54,7 +54,10 @@ constexpr SignalSpec counter() { return {"counter", kCounterStartBit, kCounterBi
 constexpr SignalSpec power_W(std::string_view n, int at) { return {n, at, 20, true, 0.5, 0, -250000, 250000, "W"}; }
 constexpr SignalSpec speed_rad_s(std::string_view n, int at) { return {n, at, 20, true, 0.01, 0, -5000, 5000, "rad/s"}; }
 constexpr SignalSpec torque_Nm(std::string_view n, int at) { return {n, at, 20, true, 0.001, 0, -500, 500, "Nm"}; }
-// the EV's driver request is a speed controller's output (gain 1000 N m per m/s): wider
+// the EV's driver request is a speed controller's output (gain 1000 N m per m/s; US06 asks
+// for up to 11 800 N m of a 150 N m drive, the rest of a braking request goes to the friction
+// brake): wide, at 0.1 N m
+constexpr SignalSpec ev_request_Nm(std::string_view n, int at) { return {n, at, 20, true, 0.1, 0, -50000, 50000, "Nm"}; }
 constexpr SignalSpec ev_torque_Nm(std::string_view n, int at) { return {n, at, 20, true, 0.01, 0, -5000, 5000, "Nm"}; }
 constexpr SignalSpec vehicle_speed(int at) { return {"speed_m_s", at, 20, true, 0.0002, 0, -100, 100, "m/s"}; }
 constexpr SignalSpec soc(int at) { return {"batSOC", at, 20, false, 1e-6, 0, 0, 1, ""}; }
@@ -68,7 +71,7 @@ inline constexpr SignalSpec kPsdCommand1Signals[] = {
     power_W("icePowRef_W", 0), torque_Nm("iceTauRef_Nm", 20), flag("iceON", 40), sample_step(), counter()};
 inline constexpr SignalSpec kPsdCommand2Signals[] = {torque_Nm("genTauRef_Nm", 0), torque_Nm("motTauRef_Nm", 20),
                                                      sample_step(), counter()};
-inline constexpr SignalSpec kEvCommandSignals[] = {ev_torque_Nm("driveTauRef_Nm", 0), sample_step(), counter()};
+inline constexpr SignalSpec kEvCommandSignals[] = {ev_request_Nm("driveTauRef_Nm", 0), sample_step(), counter()};
 inline constexpr SignalSpec kPlantStatusSignals[] = {
     {"step", 0, 32, false, 1, 0, 0, 4294967295.0, ""},
     {"fault", 32, 8, false, 1, 0, 0, 255, ""},
@@ -86,7 +89,7 @@ inline constexpr SignalSpec kPsdSensors4Signals[] = {power_W("motPowDelA_W", 0),
 inline constexpr SignalSpec kPsdSensors5Signals[] = {torque_Nm("motTauLim_Nm", 0), power_W("batPowDel_W", 20),
                                                      voltage_V(40), counter()};
 inline constexpr SignalSpec kPsdSensors6Signals[] = {current_A(0), counter()};
-inline constexpr SignalSpec kEvSensors1Signals[] = {ev_torque_Nm("driverRequest_Nm", 0), vehicle_speed(20), soc(40),
+inline constexpr SignalSpec kEvSensors1Signals[] = {ev_request_Nm("driverRequest_Nm", 0), vehicle_speed(20), soc(40),
                                                     counter()};
 inline constexpr SignalSpec kEvSensors2Signals[] = {speed_rad_s("driveW_rad_s", 0), ev_torque_Nm("driveTauLim_Nm", 20),
                                                     power_W("drivePowDel_W", 40), counter()};

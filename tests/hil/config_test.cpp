@@ -255,3 +255,39 @@ TEST(Config, TheBrakeSignalAfterTheRotorInertiaIsCheckedAtLoad) {
 
 }  // namespace
 }  // namespace ehpt::hil
+
+namespace ehpt::hil {
+namespace {
+
+TEST(Config, TheEcuRunsAtTheBusCycleTimeUnlessToldOtherwise) {
+  Scenario sc;
+  std::vector<std::string> errors;
+  ASSERT_TRUE(load_scenario(test::source_path("scenarios/psecu2_nedc.toml"), {}, sc, errors));
+  EXPECT_EQ(sc.solver.ecu_ratio, 10);  // 10 ms at h = 1 ms (io/can/ehpt.dbc's cycle time)
+  ASSERT_TRUE(load_scenario(test::source_path("scenarios/ev_sort1.toml"), {}, sc, errors));
+  EXPECT_EQ(sc.solver.ecu_ratio, 10);
+  ASSERT_TRUE(load_scenario(test::source_path("scenarios/ev_sort1.toml"), {"vehicle.ecu.period_s=0"}, sc, errors));
+  EXPECT_EQ(sc.solver.ecu_ratio, 1);  // 0: every step, as before
+  // a step that does not divide the default: the message says what to set
+  errors.clear();
+  EXPECT_FALSE(load_scenario(test::source_path("scenarios/ev_sort1.toml"), {"solver.step_s=0.003"}, sc, errors));
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("ecu.period_s = 0.01: the default ECU period (the bus cycle time) is not a whole multiple "
+                           "of solver.step_s = 0.003; set vehicle.ecu.period_s"),
+            std::string::npos)
+      << errors[0];
+  errors.clear();
+  EXPECT_TRUE(load_scenario(test::source_path("scenarios/ev_sort1.toml"),
+                            {"solver.step_s=0.003", "vehicle.ecu.period_s=0.009"}, sc, errors));
+  EXPECT_EQ(sc.solver.ecu_ratio, 3);
+  errors.clear();
+  EXPECT_FALSE(load_scenario(test::source_path("scenarios/ev_sort1.toml"), {"vehicle.ecu.codec=lcm"}, sc, errors));
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("ecu.codec = \"lcm\": must be \"none\" or \"can\""), std::string::npos) << errors[0];
+  errors.clear();
+  ASSERT_TRUE(load_scenario(test::source_path("scenarios/ev_sort1.toml"), {"vehicle.ecu.codec=can"}, sc, errors));
+  EXPECT_EQ(sc.ecu_codec, EcuCodec::kCan);
+}
+
+}  // namespace
+}  // namespace ehpt::hil

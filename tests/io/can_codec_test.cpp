@@ -315,8 +315,10 @@ TEST(CanContract, ComparisonReportsEveryKindOfDrift) {
       {"genW_rad_s : 40|20@1-", "genW_rad_s : 40|20@0-", "PsdSensors2.genW_rad_s: byte order 0"},
       {"battery_voltage_V : 40|20@1+", "battery_voltage_V : 40|20@1-", "PsdSensors5.battery_voltage_V: sign -"},
       {"icePowRef_W : 0|20@1- (0.5,0)", "icePowRef_W : 0|20@1- (0.25,0)", "PsdCommand1.icePowRef_W: factor 0.25"},
-      {"driveTauRef_Nm : 0|20@1- (0.01,0)", "driveTauRef_Nm : 0|20@1- (0.01,1)", "EvCommand.driveTauRef_Nm: offset 1"},
-      {"[-5000|5000] \"Nm\" Plant", "[-4000|5000] \"Nm\" Plant", "EvCommand.driveTauRef_Nm: min -4000"},
+      {"driveTauRef_Nm : 0|20@1- (0.1,0)", "driveTauRef_Nm : 0|20@1- (0.1,1)", "EvCommand.driveTauRef_Nm: offset 1"},
+      {"driveTauRef_Nm : 0|20@1- (0.1,0)", "driveTauRef_Nm : 0|20@1- (0.01,0)", "EvCommand.driveTauRef_Nm: factor 0.01"},
+      {"[-50000|50000] \"Nm\" Plant", "[-40000|50000] \"Nm\" Plant", "EvCommand.driveTauRef_Nm: min -40000"},
+      {"[-50000|50000] \"Nm\" Ecu", "[-50000|5000] \"Nm\" Ecu", "EvSensors1.driverRequest_Nm: max 5000"},
       {"[0|4294967295]", "[0|4294967294]", "PlantStatus.step: max 4294967294"},
       {"motW_rad_s : 40|20@1- (0.01,0) [-5000|5000] \"rad/s\"", "motW_rad_s : 40|20@1- (0.01,0) [-5000|5000] \"rpm\"",
        "PsdSensors3.motW_rad_s: unit rpm"},
@@ -617,7 +619,7 @@ TEST(CanCodec, CommandsEchoTheirStampStepModulo65536) {
     psd.iceON = true;
     msgs::EvCommand ev{};
     ev.stamp.step = c.step;
-    ev.driveTauRef_Nm = -0.01;  // raw -1
+    ev.driveTauRef_Nm = -0.1;  // raw -1 (factor 0.1)
     TxCounters tx;
     for (int i = 0; i < n % 16; ++i) tx.take(kEvCommand);  // a counter other than 0 as well
     std::array<Frame, kPsdCommandIds.size()> frames;
@@ -803,7 +805,9 @@ TEST(CanCodec, SaturationSendsTheEndsAndCountsEveryField) {
       EXPECT_EQ(encode(ev, tx, ev_frames), bad_of(0) == Bad::kInRange ? 0 : 1);
       msgs::EvCommand ev_out{};
       receive_all<msgs::EvCommand, 1>(ev_frames, kEvCommandIds, ev_out);
-      EXPECT_NEAR(ev_out.driveTauRef_Nm, expected(bad_of(0), spec_of(kEvCommandFields[0])), 0.005);
+      const SignalSpec& ev_spec = spec_of(kEvCommandFields[0]);
+      const double ev_e = expected(bad_of(0), ev_spec);
+      EXPECT_NEAR(ev_out.driveTauRef_Nm, ev_e, tolerance(ev_spec, ev_e));
     }
   }
 }
@@ -826,6 +830,23 @@ TEST(CanCodec, TheRangeEndsThemselvesAreNotSaturated) {
   EXPECT_EQ(to_raw(soc, -1e-9).value, 0);
   EXPECT_EQ(to_raw(soc, 1.0).value, 1000000);
 
+  // the EV's request torques (factor 0.1, +-50000 N m): US06's 11 800 N m is well inside
+  for (const SignalSpec* s : {find_signal(kEvCommand, "driveTauRef_Nm"), find_signal(kEvSensors1, "driverRequest_Nm")}) {
+    ASSERT_NE(s, nullptr);
+    EXPECT_FALSE(to_raw(*s, 50000.0).saturated) << s->name;
+    EXPECT_EQ(to_raw(*s, 50000.0).value, 500000) << s->name;
+    EXPECT_FALSE(to_raw(*s, -50000.0).saturated) << s->name;
+    EXPECT_EQ(to_raw(*s, -50000.0).value, -500000) << s->name;
+    EXPECT_TRUE(to_raw(*s, 50000.01).saturated) << s->name;
+    EXPECT_EQ(to_raw(*s, 50000.01).value, 500000) << s->name;
+    EXPECT_TRUE(to_raw(*s, -50000.01).saturated) << s->name;
+    EXPECT_EQ(to_raw(*s, -50000.01).value, -500000) << s->name;
+    EXPECT_FALSE(to_raw(*s, -11800.0).saturated) << s->name;
+    EXPECT_EQ(to_raw(*s, -11800.0).value, -118000) << s->name;
+    EXPECT_EQ(to_raw(*s, 0.04).value, 0) << s->name;  // rounds to the nearest 0.1
+    EXPECT_EQ(to_raw(*s, -0.06).value, -1) << s->name;
+  }
+
   msgs::PsdCommand at_ends{};
   at_ends.icePowRef_W = 250000.0;
   at_ends.iceTauRef_Nm = -500.0;
@@ -834,6 +855,24 @@ TEST(CanCodec, TheRangeEndsThemselvesAreNotSaturated) {
   TxCounters tx;
   std::array<Frame, 2> frames;
   EXPECT_EQ(encode(at_ends, tx, frames), 0);
+  // the EV command and sensor request at their ends: not counted, and back exactly
+  for (double end : {-50000.0, 50000.0}) {
+    msgs::EvCommand ev{};
+    ev.driveTauRef_Nm = end;
+    std::array<Frame, 1> ev_frames;
+    EXPECT_EQ(encode(ev, tx, ev_frames), 0) << end;
+    msgs::EvCommand ev_out{};
+    receive_all<msgs::EvCommand, 1>(ev_frames, kEvCommandIds, ev_out);
+    EXPECT_EQ(ev_out.driveTauRef_Nm, end);
+    msgs::EvSensors sensors{};
+    sensors.driverRequest_Nm = end;
+    TxCounters sensor_tx;
+    std::array<Frame, kEvSensorIds.size()> sensor_frames;
+    EXPECT_EQ(encode(sensors, PlantStatus{}, sensor_tx, sensor_frames), 0) << end;
+    msgs::EvSensors sensors_out{};
+    receive_all<msgs::EvSensors, kEvSensorIds.size()>(sensor_frames, kEvSensorIds, sensors_out);
+    EXPECT_EQ(sensors_out.driverRequest_Nm, end);
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -897,6 +936,11 @@ TEST(CanDecode, CheckFrameNamesEachReason) {
   EXPECT_EQ(check_frame(frame_of(kEvSensors1, field_bits(1000000, 40, 20)), kEvSensorIds), Reject::kNone);
   EXPECT_EQ(check_frame(frame_of(kEvSensors1, field_bits(1000001, 40, 20)), kEvSensorIds), Reject::kOutOfRange);
   EXPECT_EQ(check_frame(frame_of(kEvSensors1, field_bits(1048575, 40, 20)), kEvSensorIds), Reject::kOutOfRange);
+  // the EV's request torques (bits 0..19, signed, raw range -500000..500000 at factor 0.1)
+  for (std::size_t i = 0; i < std::size(raws); ++i) {
+    EXPECT_EQ(check_frame(frame_of(kEvCommand, field_bits(raws[i], 0, 20)), kEvCommandIds), want[i]) << raws[i];
+    EXPECT_EQ(check_frame(frame_of(kEvSensors1, field_bits(raws[i], 0, 20)), kEvSensorIds), want[i]) << raws[i];
+  }
   // a full 32-bit step and 8-bit fault are always in range
   EXPECT_EQ(check_frame(frame_of(kPlantStatus, 0x0FFFFFFFFFFFFFFFULL), kEvSensorIds), Reject::kNone);
   EXPECT_STREQ(reject_name(Reject::kOutOfRange), "out_of_range");
@@ -1042,7 +1086,7 @@ TEST(CanFreshness, CommandAgeIsTheSampleMinusTheEchoModulo65536) {
   // the other fields do not move it: a full encoded command
   msgs::EvCommand ev{};
   ev.stamp.step = 65534;
-  ev.driveTauRef_Nm = -5000.0;
+  ev.driveTauRef_Nm = -50000.0;  // the minimum: raw -500000
   TxCounters tx;
   std::array<Frame, 1> f;
   encode(ev, tx, f);
@@ -1200,7 +1244,7 @@ GoldenSet golden_values() {
   g.psd.battery_voltage_V = 201.6;
   g.psd.battery_current_A = -74.4;
   g.psd_status = {305419896u /* 0x12345678 */, 5u, true, false};
-  g.ev.driverRequest_Nm = -12.5;
+  g.ev.driverRequest_Nm = -11800.0;  // US06's largest request, beyond the old +-5000 N m
   g.ev.speed_m_s = 10.0;
   g.ev.batSOC = 0.55;
   g.ev.driveW_rad_s = 314.16;
@@ -1216,7 +1260,7 @@ GoldenSet golden_values() {
   g.psd_cmd.motTauRef_Nm = 210.001;
   g.psd_cmd.iceON = true;
   g.psd_cmd.stamp.step = 305419896;  // answers the PSD sample (0x12345678): sampleStep 0x5678
-  g.ev_cmd.driveTauRef_Nm = 12.34;
+  g.ev_cmd.driveTauRef_Nm = 12.3;  // raw 123 = 0x7B
   g.ev_cmd.stamp.step = 175053;  // 0x2ABCD: sampleStep 0xABCD (mod 2^16)
   return g;
 }
@@ -1270,10 +1314,10 @@ TEST(CanGolden, FramesMatchTheGoldenLog) {
   }
   // the frames computed by hand in tests/data/can/README.md, independent of the file
   ASSERT_EQ(got.size(), 14u);
-  EXPECT_EQ(got[7], "(1700000000.007000) vcan0 220#1EFB0F350C706408");   // EvSensors1
+  EXPECT_EQ(got[7], "(1700000000.007000) vcan0 220#10330E350C706408");   // EvSensors1
   EXPECT_EQ(got[10], "(1700000000.010000) vcan0 200#FFFFFFFF08020010");  // PlantStatus, counter 1
   EXPECT_EQ(got[11], "(1700000000.011000) vcan0 110#61EA60A4E2816705");  // PsdCommand1, sampleStep 0x5678
-  EXPECT_EQ(got[13], "(1700000000.013000) vcan0 120#D204000000D0BC0A");  // EvCommand, sampleStep 0xABCD
+  EXPECT_EQ(got[13], "(1700000000.013000) vcan0 120#7B00000000D0BC0A");  // EvCommand, sampleStep 0xABCD
 }
 
 TEST(CanGolden, GoldenLinesParseAndDecodeToTheOriginalValues) {
@@ -1320,7 +1364,7 @@ TEST(CanGolden, GoldenLinesParseAndDecodeToTheOriginalValues) {
 
   msgs::EvCommand ev_cmd{};
   receive_all<msgs::EvCommand, 1>(std::span<const Frame, 1>(frames.data() + 13, 1), kEvCommandIds, ev_cmd);
-  EXPECT_NEAR(ev_cmd.driveTauRef_Nm, 12.34, 1e-9);
+  EXPECT_NEAR(ev_cmd.driveTauRef_Nm, 12.3, 1e-9);
   // the sampleStep echoes: each command is fresh for its own sample only
   for (std::size_t i : {std::size_t{11}, std::size_t{12}}) {
     EXPECT_EQ(sample_step_of(frames[i]), 0x5678u) << lines[i];
@@ -1330,7 +1374,7 @@ TEST(CanGolden, GoldenLinesParseAndDecodeToTheOriginalValues) {
   EXPECT_EQ(sample_step_of(frames[13]), 0xABCDu);
   EXPECT_EQ(command_age_steps(frames[13], 175053u), 0u);
   // the hand-computed values: exact raws
-  EXPECT_NEAR(ev.driverRequest_Nm, -12.5, 1e-9);
+  EXPECT_NEAR(ev.driverRequest_Nm, -11800.0, 1e-9);
   EXPECT_NEAR(ev.batSOC, 0.55, 1e-12);
   EXPECT_NEAR(psd_cmd.iceTauRef_Nm, -120.25, 1e-9);
   EXPECT_NEAR(psd_cmd.icePowRef_W, 30000.5, 1e-9);
@@ -1436,9 +1480,9 @@ TEST(Socketcand, FramesParse) {
   ASSERT_EQ(parse_socketcand("< frame 123 1.0 >", f), SocketcandMessage::kFrame);
   EXPECT_EQ(f.id, 0x123u);
   EXPECT_EQ(f.len, 0);
-  ASSERT_EQ(parse_socketcand("< frame 220 1.5 1EFB0F350C706408 >", f), SocketcandMessage::kFrame);
+  ASSERT_EQ(parse_socketcand("< frame 220 1.5 10330E350C706408 >", f), SocketcandMessage::kFrame);
   EXPECT_EQ(f.len, 8);
-  EXPECT_EQ(f.data[0], 0x1E);
+  EXPECT_EQ(f.data[0], 0x10);
   EXPECT_EQ(f.data[7], 0x08);
 }
 

@@ -149,6 +149,12 @@ class Lockstep(BusTest):
         self.assertEqual(sum(bus["rejected"].values()), 0)
 
         frames = read_log(self.tmp / "bus" / "bus.log")
+        # python-can reads the log as it is (its candump -L reader)
+        import can  # noqa: E402 (Debian's python3-can)
+        logged = list(can.CanutilsLogReader(str(self.tmp / "bus" / "bus.log")))
+        self.assertEqual(len(logged), len(frames))
+        self.assertEqual(len(frames), 20001 * 7 + 20001 * 2)  # 6 sensor frames + status, 2 commands
+        self.assertEqual([(m.arbitration_id, bytes(m.data)) for m in logged[:50]], [(i, d) for _, i, d in frames[:50]])
         steps = [DBC.decode(i, d)[1]["step"] for _, i, d in frames if i == 0x200]
         self.assertEqual(steps, list(range(0, 200001, 10)))
         # each sample's frames, then its command: the decoded values are the plant's signals

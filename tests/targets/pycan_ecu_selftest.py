@@ -70,10 +70,19 @@ class DbcTest(unittest.TestCase):
 
     def test_golden_frames(self):
         # Written out by hand from the DBC, so that an encoder and decoder wrong in the same way fail.
-        # EvCommand: sampleStep 0x1234 at bits 44..59 -> byte 5 0x40, byte 6 0x23, byte 7 0x01 | counter 3 << 4.
-        # The second is line 14 of tests/data/can/golden_frames.log (the C++ codec's): 0xABCD -> D0 BC 0A.
-        cases = [("EvCommand", {"driveTauRef_Nm": -12.5, "sampleStep": 0x1234}, 3, 288, "1efb0f0000402331"),
-                 ("EvCommand", {"driveTauRef_Nm": 12.34, "sampleStep": 0xABCD}, 0, 288, "d204000000d0bc0a"),
+        # EvCommand: driveTauRef_Nm factor 0.1, -11800 -> raw -118000 -> 2^20 - 118000 = 0xE3310 at bits 0..19
+        # -> bytes 10 33 0E; sampleStep 0x1234 at bits 44..59 -> byte 5 0x40, byte 6 0x23, byte 7 0x01 | counter 3 << 4.
+        # The second is line 14 of tests/data/can/golden_frames.log (the C++ codec's): 12.3 -> raw 123 = 0x7B,
+        # 0xABCD -> D0 BC 0A. EvSensors1 is line 8 of that file: driverRequest_Nm -11800 (0xE3310), speed_m_s 10
+        # (raw 50000 = 0x0C350 at bits 20..39), batSOC 0.55 (raw 550000 = 0x86470 at bits 40..59).
+        # The last two are the ends of the EV's request range, +-50000 Nm: raw +-500000 = 0x7A120 / 0x85EE0.
+        cases = [("EvCommand", {"driveTauRef_Nm": -11800.0, "sampleStep": 0x1234}, 3, 288, "10330e0000402331"),
+                 ("EvCommand", {"driveTauRef_Nm": 12.3, "sampleStep": 0xABCD}, 0, 288, "7b00000000d0bc0a"),
+                 ("EvSensors1", {"driverRequest_Nm": -11800.0, "speed_m_s": 10.0, "batSOC": 0.55}, 0,
+                  544, "10330e350c706408"),
+                 ("EvCommand", {"driveTauRef_Nm": 50000.0, "sampleStep": 0}, 0, 288, "20a1070000000000"),
+                 ("EvSensors1", {"driverRequest_Nm": -50000.0, "speed_m_s": 0.0, "batSOC": 0.0}, 0,
+                  544, "e05e080000000000"),
                  ("PsdCommand1", {"icePowRef_W": 30000.5, "iceTauRef_Nm": -120.25, "iceON": 1, "sampleStep": 0x5678},
                   0, 272, "61ea60a4e2816705"),
                  ("PlantStatus", {"step": 0x01020304, "fault": 0x55, "locked": 1, "ecuTimeout": 1}, 10,
@@ -120,7 +129,7 @@ class DbcTest(unittest.TestCase):
 
 class StrategyTest(unittest.TestCase):
     def test_ev_passes_the_request_through(self):
-        for req in (0.0, 123.45, -800.0, 4999.99):
+        for req in (0.0, 123.45, -800.0, 4999.99, -11800.0, 50000.0):
             self.assertEqual(pycan_ecu.ev_strategy({"driverRequest_Nm": req}), {"EvCommand": {"driveTauRef_Nm": req}})
         self.assertEqual(pycan_ecu.ev_strategy({"driverRequest_Nm": 500.0}, 300.0)["EvCommand"]["driveTauRef_Nm"], 300.0)
         self.assertEqual(pycan_ecu.ev_strategy({"driverRequest_Nm": -500.0}, 300.0)["EvCommand"]["driveTauRef_Nm"], -300.0)
@@ -238,7 +247,8 @@ class EndToEndTest(unittest.TestCase):
 
     def test_ev(self):
         def sensors(rng):
-            return {"driverRequest_Nm": rng.uniform(-3000, 3000), "speed_m_s": rng.uniform(0, 40),
+            # up to the US06 request (11 800 Nm), beyond the old +-5000 Nm range
+            return {"driverRequest_Nm": rng.uniform(-12000, 12000), "speed_m_s": rng.uniform(0, 40),
                     "batSOC": 0.6, "driveW_rad_s": 100.0, "driveTauLim_Nm": 2500.0, "drivePowDel_W": 1e4,
                     "batPowDel_W": 1e4, "battery_voltage_V": 350.0, "battery_current_A": 30.0}
         # steps 65526..65545: the echo wraps from 65535 to 0 half way
@@ -246,13 +256,13 @@ class EndToEndTest(unittest.TestCase):
         self.assertEqual([got["EvCommand"]["sampleStep"] for _, got in answers],
                          list(range(65526, 65536)) + list(range(0, 10)))
         for sens, got in answers:
-            self.assertAlmostEqual(got["EvCommand"]["driveTauRef_Nm"], sens["driverRequest_Nm"], delta=0.0051)
+            self.assertAlmostEqual(got["EvCommand"]["driveTauRef_Nm"], sens["driverRequest_Nm"], delta=0.051)
         # the last steps before PlantStatus.step itself wraps (2^32 - 1)
         for sens, got in self.run_ecu("ev", 5, sensors, ["EvCommand"], ["--torque-limit-Nm", "1000"],
                                       first_step=2**32 - 5):
             self.assertIn(got["EvCommand"]["sampleStep"], range(65531, 65536))
             want = max(-1000, min(1000, sens["driverRequest_Nm"]))
-            self.assertAlmostEqual(got["EvCommand"]["driveTauRef_Nm"], want, delta=0.0051)
+            self.assertAlmostEqual(got["EvCommand"]["driveTauRef_Nm"], want, delta=0.051)
 
     def test_psd(self):
         names = pycan_ecu.SENSOR_FRAMES["psd"]
@@ -301,7 +311,7 @@ class EndToEndTest(unittest.TestCase):
             word, can_id, length, *data = line.decode().strip("< ").split()
             self.assertEqual((word, int(can_id, 16), int(length, 16)), ("send", 288, 8))
             sig = DBC.decode(288, bytes(int(b, 16) for b in data))[1]
-            self.assertAlmostEqual(sig["driveTauRef_Nm"], 10.0 * k - 50, delta=0.0051)
+            self.assertAlmostEqual(sig["driveTauRef_Nm"], 10.0 * k - 50, delta=0.051)
             self.assertEqual(sig["sampleStep"], (65526 + k) % 65536)
             counters.append(sig["counter"])
         out, err = proc.communicate(timeout=10)

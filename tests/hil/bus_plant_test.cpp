@@ -1,0 +1,208 @@
+// The bus plant (hil/bus_plant.hpp) against an ECU that lives inside a fake transport: the
+// whole loop in one thread, deterministic, so that timing rules are checked to the step and
+// the run phase's allocations are counted.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <deque>
+#include <filesystem>
+#include <unistd.h>
+
+#include "alloc_counter.hpp"
+#include "hil/batch.hpp"
+#include "hil/bus_plant.hpp"
+#include "hil/simulation.hpp"
+#include "io/can/codec.hpp"
+#include "io/output_dir.hpp"
+#include "test_plants.hpp"
+
+namespace ehpt::hil {
+namespace {
+
+using io::can::Frame;
+
+// The EV's follower behind a transport: answers each PlantStatus (while alive) with the
+// command the built-in ECU would send. Fixed rings: no allocation after construction.
+class FollowerBus final : public io::can::Transport {
+ public:
+  std::int64_t silent_from_step = -1;  // >= 0: no answer to samples at or after this step
+  std::int64_t silent_until_step = -1;  // and answers again from this step on
+  bool hostile = false;                 // add one malformed frame of each kind per sample
+
+  bool send(const Frame& f) override {
+    ++counters_.frames_out;
+    if (f.id == io::can::kEvSensors1) io::can::apply(f, sensors_);
+    if (f.id != io::can::kPlantStatus) return true;
+    io::can::PlantStatus st;
+    io::can::apply(f, st);
+    if (st.ecu_timeout) first_flagged_step = first_flagged_step < 0 ? st.step : first_flagged_step;
+    const auto step = static_cast<std::int64_t>(st.step);
+    if (silent_from_step >= 0 && step >= silent_from_step && (silent_until_step < 0 || step < silent_until_step)) {
+      restarted_ = true;
+      return true;
+    }
+    if (restarted_) {  // a new ECU process: its counters start anew
+      tx_ = io::can::TxCounters{};
+      restarted_ = false;
+    }
+    msgs::EvCommand c;
+    c.driveTauRef_Nm = sensors_.driverRequest_Nm;
+    c.stamp.step = step;
+    std::array<Frame, 1> frames;
+    io::can::encode(c, tx_, frames);
+    if (hostile) {
+      Frame unknown = frames[0];
+      unknown.id = 0x7FF;
+      push(unknown);
+      Frame short_frame = frames[0];
+      short_frame.len = 7;
+      push(short_frame);
+      Frame out_of_range = frames[0];
+      out_of_range.data[0] = 0xFF;  // raw 524287: 52 428.7 N m > 50 000 N m
+      out_of_range.data[1] = 0xFF;
+      out_of_range.data[2] = 0x07;
+      push(out_of_range);
+      if (have_last_) push(last_);  // the previous sample's frame again: stale
+    }
+    push(frames[0]);
+    if (hostile) push(frames[0]);  // the same frame twice: a repeated counter
+    last_ = frames[0];
+    have_last_ = true;
+    return true;
+  }
+  std::size_t receive(std::span<Frame> out) override {
+    std::size_t n = 0;
+    while (n < out.size() && count_ > 0) {
+      out[n++] = ring_[head_];
+      head_ = (head_ + 1) % ring_.size();
+      --count_;
+    }
+    counters_.frames_in += static_cast<std::int64_t>(n);
+    return n;
+  }
+  bool wait(std::int64_t) override { return count_ > 0; }
+  bool has_peer() const override { return true; }
+  const io::can::TransportCounters& counters() const override { return counters_; }
+  std::string describe() const override { return "fake"; }
+
+  std::int64_t first_flagged_step = -1;
+
+ private:
+  void push(const Frame& f) {
+    if (count_ < ring_.size()) ring_[(head_ + count_++) % ring_.size()] = f;
+  }
+  msgs::EvSensors sensors_;
+  io::can::TxCounters tx_;
+  std::array<Frame, 64> ring_{};
+  std::size_t head_ = 0, count_ = 0;
+  Frame last_;
+  bool have_last_ = false, restarted_ = false;
+  io::can::TransportCounters counters_;
+};
+
+struct BusRun {
+  std::unique_ptr<Simulation> sim;
+  io::JsonObject summary;
+  std::string text;
+  std::size_t run_phase_allocations = 0;
+};
+
+Scenario scenario(double duration_s) {
+  return test::load(test::source_path("scenarios/ev_nedc.toml"), {"solver.duration_s=" + std::to_string(duration_s)});
+}
+
+// The plant in lockstep with the fake ECU; allocations counted after the first chunk.
+BusRun run_on(FollowerBus& bus, const Scenario& sc, const std::string& out_dir) {
+  BusRun r;
+  SimulationOptions opt;
+  opt.external_ecu = true;
+  opt.fault_policy = FaultPolicy::kHold;
+  opt.chunk_steps = 5000;
+  r.sim = make_simulation(sc, opt);
+  BusPlantOptions bo;
+  bo.lockstep = true;
+  bo.lockstep_wait_s = 1e-4;  // a silent ECU costs 0.1 ms of wall time per sample
+  std::string error;
+  auto driver = make_bus_plant(sc, bus, bo, error);
+  EXPECT_TRUE(driver) << error;
+  io::OutputDir dir;
+  EXPECT_TRUE(dir.open(out_dir, error)) << error;
+  EXPECT_TRUE(driver->open(dir, error)) << error;
+  driver->advance(*r.sim, 5000, nullptr);  // start-up and the first chunk
+  r.sim->clear_rows();
+  const std::size_t before = test::allocation_count();
+  while (!r.sim->finished()) {
+    driver->advance(*r.sim, 5000, nullptr);
+    r.sim->clear_rows();
+  }
+  r.run_phase_allocations = test::allocation_count() - before;
+  EXPECT_TRUE(driver->flush(error)) << error;
+  driver->report(r.summary, r.text);
+  return r;
+}
+
+std::string fresh(const char* name) {
+  const auto p = std::filesystem::temp_directory_path() / ("ehpt-bus-plant-" + std::to_string(::getpid()) + "-" + name);
+  std::filesystem::remove_all(p);  // ours: named with this process's id
+  return p.string();
+}
+
+// the in-process reference: the built-in follower through the same codec
+std::unique_ptr<Simulation> reference(double duration_s) {
+  Scenario sc = test::load(test::source_path("scenarios/ev_nedc.toml"),
+                           {"solver.duration_s=" + std::to_string(duration_s), "vehicle.ecu.codec=can"});
+  auto sim = make_simulation(sc, SimulationOptions{});
+  while (!sim->finished()) sim->run();
+  return sim;
+}
+
+bool same_outputs(Simulation& a, Simulation& b) {
+  const auto x = a.outputs(), y = b.outputs();
+  return x.size() == y.size() && std::memcmp(x.data(), y.data(), x.size() * sizeof(double)) == 0;
+}
+
+TEST(BusPlant, LockstepEqualsTheCodecReferenceAndAllocatesNothing) {
+  FollowerBus bus;
+  BusRun r = run_on(bus, scenario(30), fresh("clean"));
+  auto ref = reference(30);
+  EXPECT_TRUE(same_outputs(*r.sim, *ref));
+  EXPECT_EQ(r.run_phase_allocations, 0u);
+  EXPECT_NE(r.summary.str().find("\"commands_applied\": 3001"), std::string::npos) << r.summary.str();
+  EXPECT_NE(r.summary.str().find("\"timeouts\": 0"), std::string::npos);
+  EXPECT_EQ(bus.first_flagged_step, -1);
+}
+
+TEST(BusPlant, HostileFramesAreCountedByReasonAndChangeNothing) {
+  FollowerBus bus;
+  bus.hostile = true;
+  BusRun r = run_on(bus, scenario(30), fresh("hostile"));
+  auto ref = reference(30);
+  EXPECT_TRUE(same_outputs(*r.sim, *ref));
+  EXPECT_EQ(r.run_phase_allocations, 0u);
+  const std::string j = r.summary.str();
+  // one of each per sample (3001 samples; no stale frame before the second)
+  for (const char* want : {"\"unknown_id\": 3001", "\"wrong_length\": 3001", "\"out_of_range\": 3001",
+                           "\"stale\": 3000", "\"bad_counter\": 3001", "\"commands_applied\": 3001"}) {
+    EXPECT_NE(j.find(want), std::string::npos) << want << " in " << j;
+  }
+}
+
+TEST(BusPlant, ASilentEcuGivesTheSafeStateAtTheStepItsCommandTimesOutAndAnAnswerEndsIt) {
+  FollowerBus bus;
+  bus.silent_from_step = 5000;   // the last answered sample: 4990
+  bus.silent_until_step = 8000;  // a new ECU (counters from 0) answers again from sample 8000
+  BusRun r = run_on(bus, scenario(12), fresh("silent"));
+  const std::string j = r.summary.str();
+  // the command of 4990 is older than 30 ms (3 periods) from step 4990 + 31 = 5021 until the
+  // answer of sample 8000: 2979 steps
+  EXPECT_NE(j.find("\"timeouts\": 1,"), std::string::npos) << j;
+  EXPECT_NE(j.find("\"safe_state_time_s\": 2.979,"), std::string::npos) << j;
+  EXPECT_NE(j.find("\"longest_command_gap_s\": 3.01"), std::string::npos) << j;  // 3010 steps
+  EXPECT_NE(j.find("\"lockstep_waits_timed_out\": 300,"), std::string::npos) << j;
+  // the first sample after 5021 says so on the bus
+  EXPECT_EQ(bus.first_flagged_step, 5030);
+  EXPECT_EQ(r.run_phase_allocations, 0u);
+}
+
+}  // namespace
+}  // namespace ehpt::hil
