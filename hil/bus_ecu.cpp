@@ -7,6 +7,7 @@
 
 #include "ecu/ev_follower.hpp"
 #include "ecu/psd_ecu.hpp"
+#include "hil/pacer.hpp"
 #include "io/can/codec.hpp"
 
 namespace ehpt::hil {
@@ -15,10 +16,7 @@ namespace {
 
 using io::can::Frame;
 
-std::int64_t now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
+std::int64_t now_ns() { return SteadyClock{}.now_ns(); }
 
 template <class Sensors>
 struct EcuFamily;

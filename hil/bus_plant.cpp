@@ -21,11 +21,6 @@ namespace {
 
 using io::can::Frame;
 
-std::int64_t now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
 double wall_time_s() {
   timespec ts{};
   clock_gettime(CLOCK_REALTIME, &ts);
@@ -74,7 +69,7 @@ class BusPlant final : public ExternalDriver {
         timeout_s_(opt.command_timeout_s > 0.0 ? opt.command_timeout_s : 3.0 * sc.ecu_timing.period_s),
         timeout_steps_(static_cast<std::int64_t>(std::floor(timeout_s_ / sc.solver.step_s + 1e-9))),
         filter_(F::kCommandIds),
-        pacer_(clock_, static_cast<std::int64_t>(sc.solver.step_s * 1e9)) {
+        pacer_(clock_, std::max<std::int64_t>(1, static_cast<std::int64_t>(sc.solver.step_s * 1e9))) {
     log_buf_.reserve(2 * kLogFlushBytes);
   }
 
@@ -109,16 +104,19 @@ class BusPlant final : public ExternalDriver {
         if (n >= end && n < sim.total_steps()) return;
         sim.step(n < sim.total_steps() ? 1 : 0);
         pacer_.wait_for_step(sim.step_index());
-        period_error_.record(now_ns() - pacer_.last_deadline_ns());
+        period_error_.record(clock_.now_ns() - pacer_.last_deadline_ns());
       }
-      if (log_buf_.size() > kLogFlushBytes) {
-        std::string ignored;  // a write error is reported by flush() between chunks
-        write_log(ignored);
-      }
+      if (log_buf_.size() > kLogFlushBytes) write_log(log_error_);  // flush() reports a failure
     }
   }
 
-  bool flush(std::string& error) override { return write_log(error); }
+  bool flush(std::string& error) override {
+    if (!log_error_.empty()) {  // an earlier write in the chunk failed: bus.log is incomplete
+      error = log_error_;
+      return false;
+    }
+    return write_log(error);
+  }
 
   void report(io::JsonObject& summary, std::string& text) const override {
     const io::can::TransportCounters& tc = bus_.counters();
@@ -188,8 +186,8 @@ class BusPlant final : public ExternalDriver {
   std::int64_t safe_steps() const { return safe_steps_ + (safe_ ? last_step_ - safe_since_step_ : 0); }
 
   void wait_for_peer(const std::atomic<int>* stop) {
-    const std::int64_t deadline = now_ns() + static_cast<std::int64_t>(opt_.peer_wait_s * 1e9);
-    while (!bus_.has_peer() && now_ns() < deadline) {
+    const std::int64_t deadline = clock_.now_ns() + static_cast<std::int64_t>(opt_.peer_wait_s * 1e9);
+    while (!bus_.has_peer() && clock_.now_ns() < deadline) {
       if (stop != nullptr && stop->load() != 0) return;
       bus_.wait(10'000'000);
       Frame buf[64];
@@ -201,11 +199,11 @@ class BusPlant final : public ExternalDriver {
   // lockstep_wait_s until it answers, up to peer_wait_s (an ECU on SocketCAN may start after
   // the plant: there is no connection to wait for). A silence after that is a timeout.
   void first_command(Simulation& sim, const std::atomic<int>* stop) {
-    const std::int64_t deadline = now_ns() + static_cast<std::int64_t>(opt_.peer_wait_s * 1e9);
+    const std::int64_t deadline = clock_.now_ns() + static_cast<std::int64_t>(opt_.peer_wait_s * 1e9);
     for (;;) {
       send_sample(sim, 0);
       if (wait_for_command(sim, 0, stop, false)) return;
-      if (now_ns() > deadline || (stop != nullptr && stop->load() != 0)) return;
+      if (clock_.now_ns() > deadline || (stop != nullptr && stop->load() != 0)) return;
     }
   }
 
@@ -215,6 +213,10 @@ class BusPlant final : public ExternalDriver {
   }
 
   bool write_log(std::string& error) {
+    if (!error.empty()) {  // failed before: bus.log is incomplete, keep memory bounded
+      log_buf_.clear();
+      return false;
+    }
     if (log_buf_.empty()) return true;
     const bool ok = log_.write(log_buf_, error);
     log_buf_.clear();
@@ -234,7 +236,7 @@ class BusPlant final : public ExternalDriver {
     for (const Frame& f : frames) bus_.send(f);
     log_frames(frames);
     received_mask_ = 0;  // a command for this sample: all its frames after these
-    sent_ns_ = now_ns();
+    sent_ns_ = clock_.now_ns();
   }
 
   // Until the command of the sample is complete (true), or the wait runs out.
@@ -242,10 +244,10 @@ class BusPlant final : public ExternalDriver {
     const std::int64_t deadline = sent_ns_ + static_cast<std::int64_t>(opt_.lockstep_wait_s * 1e9);
     for (;;) {
       if (drain(sim, n)) {
-        round_trip_.record(now_ns() - sent_ns_);
+        round_trip_.record(clock_.now_ns() - sent_ns_);
         return true;
       }
-      const std::int64_t left = deadline - now_ns();
+      const std::int64_t left = deadline - clock_.now_ns();
       if (left <= 0 || (stop != nullptr && stop->load() != 0)) {
         waits_timed_out_ += count ? 1 : 0;
         return false;
@@ -330,6 +332,7 @@ class BusPlant final : public ExternalDriver {
   MicrosecondHistogram round_trip_, period_error_;
   io::TextFileWriter log_;
   std::string log_buf_;
+  std::string log_error_;  // the first failed write of bus.log within a chunk
 };
 
 }  // namespace

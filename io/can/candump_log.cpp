@@ -5,15 +5,6 @@
 
 namespace ehpt::io::can {
 
-namespace {
-int hex_value(char c) {
-  if (c >= '0' && c <= '9') return c - '0';
-  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
-  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
-  return -1;
-}
-}  // namespace
-
 void append_candump_line(std::string& out, double time_s, std::string_view interface_name, const Frame& f) {
   // seconds and microseconds as integers: the same text for the same time on every machine
   const double t = std::isfinite(time_s) && time_s >= 0.0 ? time_s : 0.0;
@@ -82,7 +73,7 @@ bool parse_candump_line(std::string_view line, CandumpLine& out, const char*& wh
   }
   std::uint32_t id = 0;
   for (std::size_t i = 0; i < hash; ++i) {
-    const int v = hex_value(frame[i]);
+    const int v = hex_digit_value(frame[i]);
     if (v < 0) {
       why = "the id is not hexadecimal";
       return false;
@@ -98,7 +89,7 @@ bool parse_candump_line(std::string_view line, CandumpLine& out, const char*& wh
   f.id = id;
   f.len = static_cast<std::uint8_t>(data.size() / 2);
   for (std::size_t i = 0; i < f.len; ++i) {
-    const int hi = hex_value(data[2 * i]), lo = hex_value(data[2 * i + 1]);
+    const int hi = hex_digit_value(data[2 * i]), lo = hex_digit_value(data[2 * i + 1]);
     if (hi < 0 || lo < 0) {
       why = "the data is not hexadecimal";
       return false;

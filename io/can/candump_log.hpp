@@ -10,6 +10,14 @@
 
 namespace ehpt::io::can {
 
+// The value of a hexadecimal digit, or -1.
+constexpr int hex_digit_value(char c) {
+  if (c >= '0' && c <= '9') return c - '0';
+  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+  return -1;
+}
+
 // Appends one line (with '\n'). Allocates only if `out` lacks the capacity (reserve it).
 void append_candump_line(std::string& out, double time_s, std::string_view interface_name, const Frame& f);
 

@@ -1,5 +1,7 @@
 #include "io/can/socketcand.hpp"
 
+#include "io/can/candump_log.hpp"
+
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <netdb.h>
@@ -33,19 +35,13 @@ double wall_time_s() {
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
-int hex_value(char c) {
-  if (c >= '0' && c <= '9') return c - '0';
-  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
-  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
-  return -1;
-}
 
 // A hexadecimal number of 1..max_digits digits; -1 if it is not one.
 long parse_hex(std::string_view s, std::size_t max_digits) {
   if (s.empty() || s.size() > max_digits) return -1;
   long v = 0;
   for (char c : s) {
-    const int d = hex_value(c);
+    const int d = hex_digit_value(c);
     if (d < 0) return -1;
     v = v * 16 + d;
   }
