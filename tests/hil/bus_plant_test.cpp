@@ -3,6 +3,8 @@
 // the run phase's allocations are counted.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <deque>
 #include <filesystem>
@@ -31,11 +33,16 @@ class FollowerBus final : public io::can::Transport {
 
   bool send(const Frame& f) override {
     ++counters_.frames_out;
-    if (f.id == io::can::kEvSensors1) io::can::apply(f, sensors_);
+    if (f.id == io::can::kEvSensors1 || f.id == io::can::kEvSensors2) io::can::apply(f, sensors_);
     if (f.id != io::can::kPlantStatus) return true;
     io::can::PlantStatus st;
     io::can::apply(f, st);
-    if (st.ecu_timeout) first_flagged_step = first_flagged_step < 0 ? st.step : first_flagged_step;
+    if (st.ecu_timeout) {
+      first_flagged_step = first_flagged_step < 0 ? st.step : first_flagged_step;
+      max_drive_power_while_flagged_W = std::max(max_drive_power_while_flagged_W, std::abs(sensors_.drivePowDel_W));
+    } else {
+      max_drive_power_W = std::max(max_drive_power_W, std::abs(sensors_.drivePowDel_W));
+    }
     const auto step = static_cast<std::int64_t>(st.step);
     if (silent_from_step >= 0 && step >= silent_from_step && (silent_until_step < 0 || step < silent_until_step)) {
       restarted_ = true;
@@ -86,6 +93,7 @@ class FollowerBus final : public io::can::Transport {
   std::string describe() const override { return "fake"; }
 
   std::int64_t first_flagged_step = -1;
+  double max_drive_power_while_flagged_W = 0.0, max_drive_power_W = 0.0;
 
  private:
   void push(const Frame& f) {
@@ -189,18 +197,23 @@ TEST(BusPlant, HostileFramesAreCountedByReasonAndChangeNothing) {
 
 TEST(BusPlant, ASilentEcuGivesTheSafeStateAtTheStepItsCommandTimesOutAndAnAnswerEndsIt) {
   FollowerBus bus;
-  bus.silent_from_step = 5000;   // the last answered sample: 4990
-  bus.silent_until_step = 8000;  // a new ECU (counters from 0) answers again from sample 8000
-  BusRun r = run_on(bus, scenario(12), fresh("silent"));
+  // silent while NEDC's first acceleration (11-15 s) asks for torque
+  bus.silent_from_step = 12000;   // the last answered sample: 11990
+  bus.silent_until_step = 14000;  // a new ECU (counters from 0) answers again from sample 14000
+  BusRun r = run_on(bus, scenario(16), fresh("silent"));
   const std::string j = r.summary.str();
-  // the command of 4990 is older than 30 ms (3 periods) from step 4990 + 31 = 5021 until the
-  // answer of sample 8000: 2979 steps
+  // the command of 11990 is older than 30 ms (3 periods) from step 11990 + 31 = 12021 until
+  // the answer of sample 14000: 1979 steps
   EXPECT_NE(j.find("\"timeouts\": 1,"), std::string::npos) << j;
-  EXPECT_NE(j.find("\"safe_state_time_s\": 2.979,"), std::string::npos) << j;
-  EXPECT_NE(j.find("\"longest_command_gap_s\": 3.01"), std::string::npos) << j;  // 3010 steps
-  EXPECT_NE(j.find("\"lockstep_waits_timed_out\": 300,"), std::string::npos) << j;
-  // the first sample after 5021 says so on the bus
-  EXPECT_EQ(bus.first_flagged_step, 5030);
+  EXPECT_NE(j.find("\"safe_state_time_s\": 1.979,"), std::string::npos) << j;
+  EXPECT_NE(j.find("\"longest_command_gap_s\": 2.01"), std::string::npos) << j;  // 2010 steps
+  EXPECT_NE(j.find("\"lockstep_waits_timed_out\": 200,"), std::string::npos) << j;
+  // the first sample after 12021 says so on the bus
+  EXPECT_EQ(bus.first_flagged_step, 12030);
+  // and meanwhile the drive delivers nothing (its torque reference is zero), though it did
+  // before and after
+  EXPECT_EQ(bus.max_drive_power_while_flagged_W, 0.0);
+  EXPECT_GT(bus.max_drive_power_W, 3000.0);
   EXPECT_EQ(r.run_phase_allocations, 0u);
 }
 

@@ -200,15 +200,16 @@ class Lockstep(BusTest):
 class Safety(BusTest):
     def test_ecu_silence_gives_the_safe_state_and_a_restart_ends_it(self):
         """Wall clock: kill the ECU mid-run -> safe state within the timeout (30 ms), ecuTimeout
-        in PlantStatus, torque reference zero; a new ECU process brings the plant back."""
+        in PlantStatus, torque reference zero; a new ECU process brings the plant back. Sort1
+        accelerates to 20 km/h in the first 5 s: the driver asks for torque all along."""
         port = free_port()
-        plant = self.plant("ev_nedc", port, self.tmp / "wall", "--set", "solver.duration_s=8")
-        ecu = self.ecu("ev_nedc", port, "--set", "solver.duration_s=8")
+        plant = self.plant("ev_sort1", port, self.tmp / "wall", "--set", "solver.duration_s=8")
+        ecu = self.ecu("ev_sort1", port, "--set", "solver.duration_s=8")
         time.sleep(2.5)
         ecu.send_signal(signal.SIGKILL)
         ecu.wait()
         time.sleep(2.0)
-        ecu2 = self.ecu("ev_nedc", port, "--set", "solver.duration_s=8")
+        ecu2 = self.ecu("ev_sort1", port, "--set", "solver.duration_s=8")
         rc, _, err = self.finish(plant, 60)
         self.assertEqual(rc, 0, err)
         self.assertEqual(self.finish(ecu2, 30)[0], 0)
@@ -237,6 +238,7 @@ class Safety(BusTest):
                      if flagged[0] - frames[0][0] + 0.2 < r["time_s"] < flagged[-1] - frames[0][0] - 0.2]
         self.assertTrue(safe_rows)
         self.assertTrue(all(r["drive_torque_ref_Nm"] == 0.0 for r in safe_rows))
+        self.assertTrue(all(r["driver_request_Nm"] > 1.0 for r in safe_rows))  # while it was asked for
 
     def test_hostile_frames_are_counted_and_change_nothing(self):
         """A third client floods the bus with foreign ids, wrong lengths, replayed counters,
