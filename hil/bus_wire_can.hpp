@@ -1,0 +1,158 @@
+#pragma once
+// The CAN side of the bus plant (hil/bus_plant.cpp): a sample goes out as the frames of
+// io/can/ehpt.dbc, a command comes in as its frames, checked by the codec's rules; every frame
+// in and out goes to bus.log (candump -L). Run phase: no allocation (fixed buffers).
+
+#include <array>
+#include <cstdint>
+#include <ctime>
+#include <span>
+#include <string>
+
+#include "hil/bus_family.hpp"
+#include "io/can/candump_log.hpp"
+#include "io/can/codec.hpp"
+#include "io/can/transport.hpp"
+#include "io/output_dir.hpp"
+#include "io/text_file.hpp"
+
+namespace ehpt::hil {
+
+template <class Sensors>
+class CanWire {
+  using F = BusFamily<Sensors>;
+
+ public:
+  using Command = typename F::Command;
+
+  CanWire(io::can::Transport& bus, std::string log_interface)
+      : bus_(bus), log_interface_(std::move(log_interface)), filter_(F::kCanCommandIds) {
+    log_buf_.reserve(2 * kLogFlushBytes);
+  }
+
+  bool open(const io::OutputDir& dir, std::string& error) { return log_.open(dir.file("bus.log"), error); }
+  bool has_peer() const { return bus_.has_peer(); }
+  void wait(std::int64_t timeout_ns) { bus_.wait(timeout_ns); }
+  std::string describe() const { return bus_.describe(); }
+
+  // Before t = 0: what comes in is logged and dropped (nothing is ours yet).
+  void idle() {
+    io::can::Frame buf[64];
+    while (const std::size_t k = bus_.receive(buf)) log_frames(std::span<const io::can::Frame>(buf, k));
+  }
+
+  // The sensors, then PlantStatus (the end of the sample); returns signals saturated.
+  int send_sample(const Sensors& s, std::int64_t step, bool ecu_timeout) {
+    const io::can::PlantStatus status{static_cast<std::uint32_t>(step), s.fault, s.locked, ecu_timeout};
+    std::array<io::can::Frame, F::kCanSensorIds.size()> frames;
+    const int saturated = io::can::encode(s, status, tx_, frames);
+    for (const auto& f : frames) bus_.send(f);
+    log_frames(frames);
+    received_mask_ = 0;  // a command for this sample: all its frames after these
+    return saturated;
+  }
+
+  // Everything received: logged, checked (freshness against the newest sample), applied;
+  // on_command(command) for each complete one.
+  template <class OnCommand>
+  void receive(std::int64_t sample_step, std::int64_t max_age_steps, OnCommand&& on_command) {
+    const io::can::Freshness fresh{static_cast<std::uint32_t>(sample_step),
+                                   static_cast<std::uint32_t>(std::min<std::int64_t>(max_age_steps, 0xFFFF))};
+    io::can::Frame buf[64];
+    while (const std::size_t k = bus_.receive(buf)) {
+      log_frames(std::span<const io::can::Frame>(buf, k));
+      for (std::size_t i = 0; i < k; ++i) {
+        if (filter_.accept(buf[i], &fresh) != io::can::Reject::kNone) continue;
+        io::can::apply(buf[i], incoming_);
+        for (std::size_t j = 0; j < F::kCanCommandIds.size(); ++j) {
+          if (F::kCanCommandIds[j] == buf[i].id) received_mask_ |= 1u << j;
+        }
+        if (received_mask_ == (1u << F::kCanCommandIds.size()) - 1) {
+          received_mask_ = 0;
+          on_command(incoming_);
+        }
+      }
+    }
+  }
+
+  // The stream went stale (safe state): a restarted ECU starts its counters anew.
+  void resync() {
+    filter_.resync();
+    received_mask_ = 0;
+  }
+
+  // Between chunks: bus.log; false if a write failed (the log is then incomplete).
+  bool flush(std::string& error) {
+    if (!log_error_.empty()) {
+      error = log_error_;
+      return false;
+    }
+    return write_log(error);
+  }
+  // In the run loop: bus.log when enough is buffered (a failure is kept for flush()).
+  void maybe_flush() {
+    if (log_buf_.size() > kLogFlushBytes) write_log(log_error_);
+  }
+
+  // The wire's figures into summary.json's "bus"; rejected: their total.
+  void report(io::JsonObject& b, std::int64_t& rejected) const {
+    const io::can::TransportCounters& tc = bus_.counters();
+    const io::can::RxStats& rx = filter_.stats();
+    b.integer("frames_in", tc.frames_in);
+    b.integer("frames_out", tc.frames_out);
+    b.integer("frames_accepted", rx.accepted);
+    io::JsonObject rej;
+    rej.integer("unknown_id", rx.unknown_id);
+    rej.integer("wrong_length", rx.wrong_length);
+    rej.integer("bad_counter", rx.bad_counter);
+    rej.integer("out_of_range", rx.out_of_range);
+    rej.integer("stale", rx.stale);
+    rej.integer("malformed", tc.rx_malformed);
+    b.object("rejected", rej);
+    b.integer("frames_lost", rx.lost);
+    b.integer("send_dropped", tc.send_dropped);
+    b.integer("error_frames", tc.error_frames);
+    b.integer("peers_connected", tc.peers_connected);
+    b.integer("peers_lost", tc.peers_lost);
+    rejected = rx.unknown_id + rx.wrong_length + rx.bad_counter + rx.out_of_range + rx.stale + tc.rx_malformed;
+  }
+  std::int64_t messages_in() const { return bus_.counters().frames_in; }
+  std::int64_t messages_out() const { return bus_.counters().frames_out; }
+  static constexpr const char* kUnit = "frames";
+
+ private:
+  // bus.log is written when this much is buffered (and between chunks)
+  static constexpr std::size_t kLogFlushBytes = 1 << 20;
+
+  static double wall_time_s() {
+    timespec ts{};
+    clock_gettime(CLOCK_REALTIME, &ts);
+    return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+  }
+  void log_frames(std::span<const io::can::Frame> frames) {
+    const double t = wall_time_s();
+    for (const auto& f : frames) io::can::append_candump_line(log_buf_, t, log_interface_, f);
+  }
+  bool write_log(std::string& error) {
+    if (!error.empty()) {  // failed before: bus.log is incomplete, keep memory bounded
+      log_buf_.clear();
+      return false;
+    }
+    if (log_buf_.empty()) return true;
+    const bool ok = log_.write(log_buf_, error);
+    log_buf_.clear();
+    return ok;
+  }
+
+  io::can::Transport& bus_;
+  std::string log_interface_;
+  io::can::FrameFilter filter_;
+  io::can::TxCounters tx_;
+  Command incoming_{};
+  unsigned received_mask_ = 0;
+  io::TextFileWriter log_;
+  std::string log_buf_;
+  std::string log_error_;  // the first failed write of bus.log within a chunk
+};
+
+}  // namespace ehpt::hil
