@@ -1,14 +1,16 @@
 #include "hil/bus_ecu.hpp"
 
-#include <chrono>
 #include <memory>
 #include <ostream>
 #include <variant>
 
 #include "ecu/ev_follower.hpp"
 #include "ecu/psd_ecu.hpp"
+#include "hil/bus_family.hpp"
+#include "hil/bus_wire_lcm.hpp"
 #include "hil/pacer.hpp"
 #include "io/can/codec.hpp"
+#include "io/lcm/lcm_codec.hpp"
 
 namespace ehpt::hil {
 
@@ -18,44 +20,159 @@ using io::can::Frame;
 
 std::int64_t now_ns() { return SteadyClock{}.now_ns(); }
 
+// The ECU's side of the CAN contract: a sample is complete when PlantStatus arrives after
+// every sensor frame; the command goes out as its frames.
 template <class Sensors>
-struct EcuFamily;
-template <>
-struct EcuFamily<msgs::PsdSensors> {
-  using Command = msgs::PsdCommand;
-  static constexpr const auto& kSensorIds = io::can::kPsdSensorIds;
-  static constexpr const auto& kCommandIds = io::can::kPsdCommandIds;
-};
-template <>
-struct EcuFamily<msgs::EvSensors> {
-  using Command = msgs::EvCommand;
-  static constexpr const auto& kSensorIds = io::can::kEvSensorIds;
-  static constexpr const auto& kCommandIds = io::can::kEvCommandIds;
+class CanEcuWire {
+  using F = BusFamily<Sensors>;
+
+ public:
+  using Command = typename F::Command;
+  CanEcuWire(io::can::Transport& bus, double h_s) : bus_(bus), h_s_(h_s), filter_(F::kCanSensorIds) {}
+
+  bool has_peer() const { return bus_.has_peer(); }
+  void wait(std::int64_t ns) { bus_.wait(ns); }
+
+  // on_sample(sensors) for each complete sample; true if anything of the plant's came in
+  template <class OnSample>
+  bool receive(OnSample&& on_sample) {
+    bool heard = false;
+    Frame buf[64];
+    while (const std::size_t k = bus_.receive(buf)) {
+      for (std::size_t i = 0; i < k; ++i) {
+        const Frame& f = buf[i];
+        if (filter_.accept(f) != io::can::Reject::kNone) continue;
+        heard = true;
+        if (f.id != io::can::kPlantStatus) {
+          io::can::apply(f, sensors_);
+          for (std::size_t j = 0; j + 1 < F::kCanSensorIds.size(); ++j) {
+            if (F::kCanSensorIds[j] == f.id) mask_ |= 1u << j;
+          }
+          continue;
+        }
+        io::can::PlantStatus status;
+        io::can::apply(f, status);
+        if (mask_ != kAllSensors) {  // joined mid-sample, or frames lost: wait for a whole one
+          ++incomplete_;
+          mask_ = 0;
+          continue;
+        }
+        mask_ = 0;
+        sensors_.fault = status.fault;
+        sensors_.locked = status.locked;
+        sensors_.stamp = msgs::Stamp{static_cast<double>(status.step) * h_s_, status.step, sequence_++};
+        on_sample(sensors_);
+      }
+    }
+    return heard;
+  }
+
+  // the command's stamp.step is the sample it answers (sampleStep)
+  std::int64_t send_command(const Command& c) {
+    std::array<Frame, F::kCanCommandIds.size()> frames;
+    const int saturated = io::can::encode(c, tx_, frames);
+    for (const Frame& out : frames) bus_.send(out);
+    return saturated;
+  }
+
+  void summary(std::ostream& log) const {
+    const io::can::RxStats& rx = filter_.stats();
+    const io::can::TransportCounters& tc = bus_.counters();
+    log << "frames in " << tc.frames_in << ", out " << tc.frames_out << ", rejected "
+        << rx.unknown_id + rx.wrong_length + rx.bad_counter + rx.out_of_range << ", incomplete samples "
+        << incomplete_;
+  }
+
+ private:
+  static constexpr unsigned kAllSensors = (1u << (F::kCanSensorIds.size() - 1)) - 1;  // all but PlantStatus
+  io::can::Transport& bus_;
+  double h_s_;
+  io::can::FrameFilter filter_;
+  io::can::TxCounters tx_;
+  Sensors sensors_{};
+  unsigned mask_ = 0;
+  std::uint32_t sequence_ = 0;
+  std::int64_t incomplete_ = 0;
 };
 
-template <class Sensors, class Controller>
-BusEcuResult serve(Controller& ecu, double h_s, io::can::Transport& bus, const BusEcuOptions& opt,
-                   const std::atomic<int>* stop, std::ostream& log) {
-  using F = EcuFamily<Sensors>;
-  using Command = typename F::Command;
+// The ECU's side over LCM: one message per sample, one per command.
+template <class Sensors>
+class LcmEcuWire {
+  using SensorsMsg = typename io::lcm::LcmTypesOf<Sensors>::SensorsMsg;
+  using CommandMsg = typename io::lcm::LcmTypesOf<Sensors>::CommandMsg;
+
+ public:
+  using Command = typename BusFamily<Sensors>::Command;
+  LcmEcuWire(io::lcm::LcmBus& bus, const std::string& prefix, std::string& error)
+      : bus_(bus), command_channel_(prefix + "ECU_COMMAND") {
+    out_.resize(static_cast<std::size_t>(CommandMsg{}.getEncodedSize()));
+    ok_ = bus_.subscribe(prefix + "PLANT_STATUS", &LcmEcuWire::on_message, this, error);
+  }
+  bool ok() const { return ok_; }
+  bool has_peer() const { return true; }
+  void wait(std::int64_t ns) { bus_.wait(ns); }
+
+  template <class OnSample>
+  bool receive(OnSample&& on_sample) {
+    const std::int64_t before = bus_.counters().received;
+    bus_.handle_now();
+    for (std::size_t i = 0; i < pending_count_; ++i) on_sample(pending_[i]);
+    pending_count_ = 0;
+    return bus_.counters().received != before;
+  }
+
+  std::int64_t send_command(const Command& c) {
+    CommandMsg m{};
+    io::lcm::to_lcm(c, lcm_utime_now(), m);
+    const int n = m.encode(out_.data(), 0, static_cast<int>(out_.size()));
+    if (n > 0) bus_.publish(command_channel_.c_str(), out_.data(), n);
+    return 0;
+  }
+
+  void summary(std::ostream& log) const {
+    log << "messages in " << bus_.counters().received << ", out " << bus_.counters().published << ", malformed "
+        << malformed_;
+  }
+
+ private:
+  static void on_message(const void* data, int size, void* user) {
+    auto* self = static_cast<LcmEcuWire*>(user);
+    SensorsMsg m{};
+    if (m.decode(data, 0, size) != size || self->pending_count_ == self->pending_.size()) {
+      ++self->malformed_;
+      return;
+    }
+    Sensors s{};
+    io::lcm::from_lcm(m, s);
+    s.stamp.sequence = self->sequence_++;
+    self->pending_[self->pending_count_++] = s;
+  }
+
+  io::lcm::LcmBus& bus_;
+  std::string command_channel_;
+  std::vector<std::uint8_t> out_;
+  bool ok_ = false;
+  std::array<Sensors, 16> pending_{};
+  std::size_t pending_count_ = 0;
+  std::uint32_t sequence_ = 0;
+  std::int64_t malformed_ = 0;
+};
+
+template <class Wire, class Controller>
+BusEcuResult serve(Controller& ecu, Wire& wire, const BusEcuOptions& opt, const std::atomic<int>* stop,
+                   std::ostream& log) {
+  using Command = typename Wire::Command;
   BusEcuResult res;
-  io::can::FrameFilter filter(F::kSensorIds);
-  io::can::TxCounters tx;
-  Sensors sensors{};
   Command command{};
-  unsigned mask = 0;
-  constexpr unsigned kAllSensors = (1u << (F::kSensorIds.size() - 1)) - 1;  // every frame but PlantStatus
-  std::uint32_t sequence = 0;
   std::int64_t last_frame_ns = now_ns();
   bool heard = false;
-  Frame buf[64];
   for (;;) {
     if (stop != nullptr && stop->load() != 0) {
       res.exit_code = 128 + stop->load();
       res.why_stopped = "stopped by a signal";
       break;
     }
-    if (!bus.has_peer()) {
+    if (!wire.has_peer()) {
       res.why_stopped = "the plant closed the connection";
       break;
     }
@@ -63,52 +180,51 @@ BusEcuResult serve(Controller& ecu, double h_s, io::can::Transport& bus, const B
       res.why_stopped = "answered the samples asked for";
       break;
     }
-    const std::int64_t quiet_ns = now_ns() - last_frame_ns;
-    if (quiet_ns > static_cast<std::int64_t>(opt.idle_timeout_s * 1e9)) {
+    if (now_ns() - last_frame_ns > static_cast<std::int64_t>(opt.idle_timeout_s * 1e9)) {
       res.why_stopped = heard ? "the plant went quiet" : "no plant on the bus";
       break;
     }
-    bus.wait(100'000'000);
-    while (const std::size_t k = bus.receive(buf)) {
-      for (std::size_t i = 0; i < k; ++i) {
-        const Frame& f = buf[i];
-        if (filter.accept(f) != io::can::Reject::kNone) continue;
-        last_frame_ns = now_ns();
-        heard = true;
-        if (f.id != io::can::kPlantStatus) {
-          io::can::apply(f, sensors);
-          for (std::size_t j = 0; j + 1 < F::kSensorIds.size(); ++j) {
-            if (F::kSensorIds[j] == f.id) mask |= 1u << j;
-          }
-          continue;
-        }
-        io::can::PlantStatus status;
-        io::can::apply(f, status);
-        if (mask != kAllSensors) {  // joined mid-sample, or frames lost: wait for a whole one
-          ++res.incomplete;
-          mask = 0;
-          continue;
-        }
-        mask = 0;
-        sensors.fault = status.fault;
-        sensors.locked = status.locked;
-        sensors.stamp = msgs::Stamp{static_cast<double>(status.step) * h_s, status.step, sequence++};
-        ecu.update(sensors, command);
-        command.stamp = sensors.stamp;  // the sample it answers: sampleStep on the bus
-        std::array<Frame, F::kCommandIds.size()> frames;
-        res.saturated += io::can::encode(command, tx, frames);
-        for (const Frame& out : frames) bus.send(out);
-        ++res.samples;
-      }
+    wire.wait(100'000'000);
+    const bool got = wire.receive([&](const auto& sensors) {
+      ecu.update(sensors, command);
+      command.stamp = sensors.stamp;  // the sample it answers
+      res.saturated += wire.send_command(command);
+      ++res.samples;
+    });
+    if (got) {
+      last_frame_ns = now_ns();
+      heard = true;
     }
   }
-  const io::can::RxStats& rx = filter.stats();
-  const io::can::TransportCounters& tc = bus.counters();
-  log << "ecu           " << res.samples << " samples answered (" << res.why_stopped << "); frames in "
-      << tc.frames_in << ", out " << tc.frames_out << ", rejected "
-      << rx.unknown_id + rx.wrong_length + rx.bad_counter + rx.out_of_range << ", incomplete samples "
-      << res.incomplete << ", saturated signals " << res.saturated << "\n";
+  log << "ecu           " << res.samples << " samples answered (" << res.why_stopped << "); ";
+  wire.summary(log);
+  log << ", saturated signals " << res.saturated << "\n";
   return res;
+}
+
+// The scenario's built-in ECU over a wire made by make_wire(family tag).
+template <class MakeWire>
+BusEcuResult serve_scenario(const Scenario& sc, MakeWire&& make_wire, const BusEcuOptions& opt,
+                            const std::atomic<int>* stop, std::ostream& log) {
+  const auto go = [&](auto& controller, auto& wire) {
+    if constexpr (requires { wire->ok(); }) {
+      if (!wire->ok()) {
+        BusEcuResult res;
+        res.exit_code = 2;
+        res.why_stopped = "cannot subscribe";
+        return res;
+      }
+    }
+    return serve(controller, *wire, opt, stop, log);
+  };
+  if (const auto* e = std::get_if<ecu::PsdEcuParams>(&sc.ecu)) {
+    ecu::PsdEcu controller(*e, e->period_s);
+    auto wire = make_wire(msgs::PsdSensors{});
+    return go(controller, wire);
+  }
+  ecu::EvFollower follower;
+  auto wire = make_wire(msgs::EvSensors{});
+  return go(follower, wire);
 }
 
 }  // namespace
@@ -123,13 +239,27 @@ bool has_bus_ecu(const Scenario& sc, std::string& why) {
 
 BusEcuResult run_bus_ecu(const Scenario& sc, io::can::Transport& bus, const BusEcuOptions& opt,
                          const std::atomic<int>* stop, std::ostream& log) {
-  const double h = sc.solver.step_s;
-  if (const auto* e = std::get_if<ecu::PsdEcuParams>(&sc.ecu)) {
-    ecu::PsdEcu controller(*e, e->period_s);
-    return serve<msgs::PsdSensors>(controller, h, bus, opt, stop, log);
-  }
-  ecu::EvFollower follower;
-  return serve<msgs::EvSensors>(follower, h, bus, opt, stop, log);
+  return serve_scenario(
+      sc,
+      [&](auto tag) {
+        using S = decltype(tag);
+        return std::make_unique<CanEcuWire<S>>(bus, sc.solver.step_s);
+      },
+      opt, stop, log);
+}
+
+BusEcuResult run_bus_ecu(const Scenario& sc, io::lcm::LcmBus& bus, const std::string& prefix,
+                         const BusEcuOptions& opt, const std::atomic<int>* stop, std::ostream& log) {
+  std::string error;
+  BusEcuResult res = serve_scenario(
+      sc,
+      [&](auto tag) {
+        using S = decltype(tag);
+        return std::make_unique<LcmEcuWire<S>>(bus, prefix, error);
+      },
+      opt, stop, log);
+  if (!error.empty()) log << "error: " << error << "\n";
+  return res;
 }
 
 }  // namespace ehpt::hil

@@ -12,6 +12,7 @@
 
 #include "hil/config.hpp"
 #include "io/can/transport.hpp"
+#include "io/lcm/lcm_bus.hpp"
 
 namespace ehpt::hil {
 
@@ -33,5 +34,8 @@ bool has_bus_ecu(const Scenario& sc, std::string& why);
 
 BusEcuResult run_bus_ecu(const Scenario& sc, io::can::Transport& bus, const BusEcuOptions& opt,
                          const std::atomic<int>* stop, std::ostream& log);
+// The same over LCM: <prefix>PLANT_STATUS in, <prefix>ECU_COMMAND out.
+BusEcuResult run_bus_ecu(const Scenario& sc, io::lcm::LcmBus& bus, const std::string& prefix,
+                         const BusEcuOptions& opt, const std::atomic<int>* stop, std::ostream& log);
 
 }  // namespace ehpt::hil

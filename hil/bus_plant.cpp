@@ -8,6 +8,7 @@
 
 #include "hil/bus_family.hpp"
 #include "hil/bus_wire_can.hpp"
+#include "hil/bus_wire_lcm.hpp"
 #include "hil/histogram.hpp"
 #include "hil/pacer.hpp"
 #include "hil/simulation.hpp"
@@ -259,6 +260,17 @@ std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::can::Tran
   }
   using S = msgs::EvSensors;
   return std::make_unique<BusPlant<S, CanWire<S>>>(sc, opt, bus, opt.log_interface);
+}
+
+std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::lcm::LcmBus& bus, const BusPlantOptions& opt,
+                                               std::string& error) {
+  if (!can_run_on_bus(sc, error)) return nullptr;
+  if (std::holds_alternative<plant::PsdParams>(sc.plant)) {
+    using S = msgs::PsdSensors;
+    return std::make_unique<BusPlant<S, LcmWire<S>>>(sc, opt, bus, opt.lcm_prefix);
+  }
+  using S = msgs::EvSensors;
+  return std::make_unique<BusPlant<S, LcmWire<S>>>(sc, opt, bus, opt.lcm_prefix);
 }
 
 }  // namespace ehpt::hil

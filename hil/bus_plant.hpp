@@ -23,6 +23,7 @@
 #include "hil/batch.hpp"
 #include "hil/config.hpp"
 #include "io/can/transport.hpp"
+#include "io/lcm/lcm_bus.hpp"
 
 namespace ehpt::hil {
 
@@ -34,6 +35,7 @@ struct BusPlantOptions {
   double lockstep_wait_s = 1.0;
   double peer_wait_s = 60.0;  // wall time to wait for an ECU to connect before t = 0
   std::string log_interface = "can0";  // the interface name in bus.log lines
+  std::string lcm_prefix = "EHPT_";    // LCM: channels <prefix>PLANT_STATUS, <prefix>ECU_COMMAND
 };
 
 // False and a one-line reason if the scenario cannot run on the bus (a rig without bus
@@ -41,6 +43,9 @@ struct BusPlantOptions {
 bool can_run_on_bus(const Scenario& sc, std::string& why);
 // The driver of `ehpt plant` (nullptr and why if !can_run_on_bus).
 std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::can::Transport& bus,
+                                               const BusPlantOptions& opt, std::string& error);
+// The same over LCM (io/lcm/): one message per sample and per command, doubles.
+std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::lcm::LcmBus& bus,
                                                const BusPlantOptions& opt, std::string& error);
 
 }  // namespace ehpt::hil

@@ -40,6 +40,7 @@
 #include "hil/simulation.hpp"
 #include "io/can/bus_spec.hpp"
 #include "io/can/contract.hpp"
+#include "io/lcm/lcm_bus.hpp"
 #include "io/output_dir.hpp"
 #include "io/process.hpp"
 
@@ -128,7 +129,8 @@ const char* kPlantHelp =
     "figures in summary.json (\"bus\").\n"
     "  --bus SPEC       socketcan:IFACE (e.g. socketcan:vcan0), or socketcand:HOST:PORT (the\n"
     "                   plant listens there; python-can's socketcand interface and 'ehpt ecu'\n"
-    "                   connect)\n"
+    "                   connect), or lcm:URL (lcm:udpm://239.255.76.67:7667?ttl=0, lcm:memq://)\n"
+    "  --lcm-prefix P   LCM channels P + PLANT_STATUS and P + ECU_COMMAND (default EHPT_)\n"
     "  --lockstep       advance one ECU period only after the ECU's command for it has arrived\n"
     "                   (deterministic SIL); default: wall clock (real time, latest command)\n"
     "  --command-timeout-s T  a command older than T puts the plant in its safe state (torques\n"
@@ -147,7 +149,9 @@ const char* kEcuHelp =
     "own process: for each PlantStatus frame it computes one command from that sample's sensor\n"
     "frames and sends it. Stops when the plant closes the connection (socketcand), after S\n"
     "seconds without a frame from the plant (default 10), or after N samples.\n"
-    "  --bus SPEC       socketcan:IFACE, or socketcand:HOST:PORT (connects to 'ehpt plant')\n";
+    "  --bus SPEC       socketcan:IFACE, socketcand:HOST:PORT (connects to 'ehpt plant'), or\n"
+    "                   lcm:URL (lcm:udpm://239.255.76.67:7667?ttl=0)\n"
+    "  --lcm-prefix P   LCM channel prefix (default EHPT_)\n";
 
 const char* kListHelp =
     "usage: ehpt list [--dir DIR]\n"
@@ -349,7 +353,7 @@ bool parse_positive(const std::string& option, const std::string& text, double& 
 
 // The options 'ehpt plant' and 'ehpt ecu' share, and theirs.
 struct BusArgs {
-  std::string scenario, out_dir, bus;
+  std::string scenario, out_dir, bus, lcm_prefix = "EHPT_";
   std::vector<std::string> sets;
   bool lockstep = false, quiet = false;
   double command_timeout_s = 0.0, lockstep_wait_s = 1.0, ecu_wait_s = 60.0, idle_timeout_s = 10.0, max_samples = 0.0;
@@ -359,7 +363,7 @@ struct BusArgs {
 int parse_bus_args(const std::vector<std::string>& args, bool plant, const char* help, BusArgs& a) {
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& o = args[i];
-    const bool takes_value = o == "--bus" || o == "--set" || (plant && (o == "--out" || o == "--command-timeout-s" ||
+    const bool takes_value = o == "--bus" || o == "--set" || o == "--lcm-prefix" || (plant && (o == "--out" || o == "--command-timeout-s" ||
                                                                         o == "--lockstep-wait-s" || o == "--ecu-wait-s")) ||
                              (!plant && (o == "--idle-timeout-s" || o == "--max-samples"));
     if (takes_value && i + 1 >= args.size()) {
@@ -370,6 +374,12 @@ int parse_bus_args(const std::vector<std::string>& args, bool plant, const char*
       a.bus = args[++i];
     } else if (o == "--set") {
       a.sets.push_back(args[++i]);
+    } else if (o == "--lcm-prefix") {
+      a.lcm_prefix = args[++i];
+      if (a.lcm_prefix.size() > 100 || a.lcm_prefix.find_first_of(" \t\n") != std::string::npos) {
+        std::cerr << "--lcm-prefix: at most 100 characters, no spaces\n";
+        return 1;
+      }
     } else if (plant && o == "--out") {
       a.out_dir = args[++i];
       if (a.out_dir.empty()) {
@@ -422,9 +432,10 @@ int cmd_plant(const std::vector<std::string>& args) {
   if (wants_help(args)) return out(kPlantHelp) ? 0 : 1;
   BusArgs a;
   if (const int rc = parse_bus_args(args, true, kPlantHelp, a); rc != 0) return rc;
+  const bool lcm = a.bus.rfind("lcm:", 0) == 0;
   ehpt::io::can::BusSpec spec;
-  std::string error;
-  if (!ehpt::io::can::parse_bus_spec(a.bus, spec, error)) {
+  std::string error, lcm_url;
+  if (lcm ? !ehpt::io::lcm::parse_lcm_spec(a.bus, lcm_url, error) : !ehpt::io::can::parse_bus_spec(a.bus, spec, error)) {
     std::cerr << error << "\n";
     return 1;
   }
@@ -439,6 +450,7 @@ int cmd_plant(const std::vector<std::string>& args) {
   bo.lockstep_wait_s = a.lockstep_wait_s;
   bo.peer_wait_s = a.ecu_wait_s;
   bo.log_interface = spec.interface_name;
+  bo.lcm_prefix = a.lcm_prefix;
   // the bus first: a bus that cannot open leaves no output folder behind
   std::unique_ptr<ehpt::io::can::Transport> bus;
   std::unique_ptr<ehpt::hil::ExternalDriver> driver;
@@ -447,14 +459,24 @@ int cmd_plant(const std::vector<std::string>& args) {
     std::cerr << "error: " << why << "\n";
     return 2;
   }
-  bus = ehpt::io::can::open_bus(spec, ehpt::io::can::BusRole::kPlant, rx_ids(sc, true), error);
-  if (!bus) {
-    std::cerr << "error: " << error << "\n";
-    return 2;
+  std::unique_ptr<ehpt::io::lcm::LcmBus> lcm_bus;
+  if (lcm) {
+    lcm_bus = ehpt::io::lcm::LcmBus::open(lcm_url, error);
+    if (!lcm_bus) {
+      std::cerr << "error: " << error << "\n";
+      return 2;
+    }
+    driver = ehpt::hil::make_bus_plant(sc, *lcm_bus, bo, why);
+  } else {
+    bus = ehpt::io::can::open_bus(spec, ehpt::io::can::BusRole::kPlant, rx_ids(sc, true), error);
+    if (!bus) {
+      std::cerr << "error: " << error << "\n";
+      return 2;
+    }
+    driver = ehpt::hil::make_bus_plant(sc, *bus, bo, why);
   }
-  driver = ehpt::hil::make_bus_plant(sc, *bus, bo, why);
   if (!a.quiet) {
-    std::cerr << "plant " << sc.name << " on " << bus->describe() << (a.lockstep ? " (lockstep)" : " (wall clock)")
+    std::cerr << "plant " << sc.name << " on " << a.bus << (a.lockstep ? " (lockstep)" : " (wall clock)")
               << "; waiting for an ECU\n";
   }
   ehpt::hil::BatchOptions opt;
@@ -470,7 +492,7 @@ int cmd_plant(const std::vector<std::string>& args) {
   if (!a.quiet) {
     std::string text = r.summary_text;
     if (!r.results_dir.empty()) {
-      text += "outputs       " + r.results_dir + "/timeseries.csv, summary.json, bus.log\n";
+      text += "outputs       " + r.results_dir + "/timeseries.csv, summary.json" + (lcm ? "" : ", bus.log") + "\n";
     }
     printed = out(text);
   }
@@ -482,9 +504,10 @@ int cmd_ecu(const std::vector<std::string>& args) {
   if (wants_help(args)) return out(kEcuHelp) ? 0 : 1;
   BusArgs a;
   if (const int rc = parse_bus_args(args, false, kEcuHelp, a); rc != 0) return rc;
+  const bool lcm = a.bus.rfind("lcm:", 0) == 0;
   ehpt::io::can::BusSpec spec;
-  std::string error;
-  if (!ehpt::io::can::parse_bus_spec(a.bus, spec, error)) {
+  std::string error, lcm_url;
+  if (lcm ? !ehpt::io::lcm::parse_lcm_spec(a.bus, lcm_url, error) : !ehpt::io::can::parse_bus_spec(a.bus, spec, error)) {
     std::cerr << error << "\n";
     return 1;
   }
@@ -494,14 +517,25 @@ int cmd_ecu(const std::vector<std::string>& args) {
     std::cerr << "error: " << error << "\n";
     return 2;
   }
+  ehpt::hil::BusEcuOptions eo;
+  eo.idle_timeout_s = a.idle_timeout_s;
+  eo.max_samples = static_cast<std::int64_t>(a.max_samples);
+  if (lcm) {
+    const auto lcm_bus = ehpt::io::lcm::LcmBus::open(lcm_url, error);
+    if (!lcm_bus) {
+      std::cerr << "error: " << error << "\n";
+      return 2;
+    }
+    std::ostringstream log;
+    const ehpt::hil::BusEcuResult r = ehpt::hil::run_bus_ecu(sc, *lcm_bus, a.lcm_prefix, eo, &g_stop, log);
+    if (!a.quiet && !out(log.str())) return 1;
+    return r.exit_code;
+  }
   const auto bus = ehpt::io::can::open_bus(spec, ehpt::io::can::BusRole::kEcu, rx_ids(sc, false), error);
   if (!bus) {
     std::cerr << "error: " << error << "\n";
     return 2;
   }
-  ehpt::hil::BusEcuOptions eo;
-  eo.idle_timeout_s = a.idle_timeout_s;
-  eo.max_samples = static_cast<std::int64_t>(a.max_samples);
   std::ostringstream log;
   const ehpt::hil::BusEcuResult r = ehpt::hil::run_bus_ecu(sc, *bus, eo, &g_stop, log);
   if (!a.quiet && !out(log.str())) return 1;

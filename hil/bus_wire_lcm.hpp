@@ -1,0 +1,132 @@
+#pragma once
+// The LCM side of the bus plant (hil/bus_plant.cpp): a sample goes out as one message on
+// <prefix>PLANT_STATUS (sensors and status, doubles), a command comes in as one message on
+// <prefix>ECU_COMMAND. A command is taken if it decodes, answers a sample no older than the
+// freshness allows (lockstep: the current one), and is newer than the last one taken (a
+// repeat or a replay is refused). Sessions are recorded with lcm-logger (no bus.log).
+// Run phase: ehpt allocates nothing (fixed buffers); liblcm's own per-message copy is
+// outside the plant's step (see io/lcm/lcm_bus.hpp).
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "hil/bus_family.hpp"
+#include "io/lcm/lcm_bus.hpp"
+#include "io/lcm/lcm_codec.hpp"
+#include "io/output_dir.hpp"
+
+namespace ehpt::hil {
+
+inline std::int64_t lcm_utime_now() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+template <class Sensors>
+class LcmWire {
+  using F = BusFamily<Sensors>;
+  using SensorsMsg = typename io::lcm::LcmTypesOf<Sensors>::SensorsMsg;
+  using CommandMsg = typename io::lcm::LcmTypesOf<Sensors>::CommandMsg;
+
+ public:
+  using Command = typename F::Command;
+  static constexpr const char* kUnit = "messages";
+
+  // Start-up: subscribes to the command channel (ok() false and error set if it cannot).
+  LcmWire(io::lcm::LcmBus& bus, const std::string& prefix)
+      : bus_(bus), status_channel_(prefix + "PLANT_STATUS"), command_channel_(prefix + "ECU_COMMAND") {
+    out_.resize(static_cast<std::size_t>(SensorsMsg{}.getEncodedSize()));
+    ok_ = bus_.subscribe(command_channel_, &LcmWire::on_message, this, error_);
+  }
+
+  bool open(const io::OutputDir&, std::string& error) {
+    if (!ok_) error = error_;
+    return ok_;
+  }
+  bool has_peer() const { return true; }  // LCM has no connections: t = 0 waits for a first command
+  void wait(std::int64_t timeout_ns) { bus_.wait(timeout_ns); }
+  std::string describe() const { return "lcm:" + bus_.url(); }
+  void idle() {
+    bus_.handle_now();
+    pending_count_ = 0;
+  }
+
+  int send_sample(const Sensors& s, std::int64_t, bool ecu_timeout) {
+    SensorsMsg m{};
+    io::lcm::to_lcm(s, lcm_utime_now(), ecu_timeout, m);
+    const int n = m.encode(out_.data(), 0, static_cast<int>(out_.size()));
+    if (n > 0) bus_.publish(status_channel_.c_str(), out_.data(), n);
+    return 0;  // doubles: nothing saturates
+  }
+
+  template <class OnCommand>
+  void receive(std::int64_t sample_step, std::int64_t max_age_steps, OnCommand&& on_command) {
+    sample_step_ = sample_step;
+    max_age_steps_ = max_age_steps;
+    bus_.handle_now();  // on_message runs for each message that has arrived
+    for (std::size_t i = 0; i < pending_count_; ++i) on_command(pending_[i]);
+    pending_count_ = 0;
+  }
+
+  void resync() { last_step_ = -1; }  // a restarted ECU's first command is taken as it is
+  bool flush(std::string&) { return true; }
+  void maybe_flush() {}
+
+  void report(io::JsonObject& b, std::int64_t& rejected) const {
+    b.integer("messages_in", bus_.counters().received);
+    b.integer("messages_out", bus_.counters().published);
+    b.integer("messages_accepted", accepted_);
+    io::JsonObject rej;
+    rej.integer("malformed", malformed_);
+    rej.integer("stale", stale_);
+    rej.integer("repeated", repeated_);
+    b.object("rejected", rej);
+    b.integer("send_dropped", bus_.counters().publish_failed);
+    rejected = malformed_ + stale_ + repeated_;
+  }
+  std::int64_t messages_in() const { return bus_.counters().received; }
+  std::int64_t messages_out() const { return bus_.counters().published; }
+
+ private:
+  static void on_message(const void* data, int size, void* user) {
+    auto* self = static_cast<LcmWire*>(user);
+    CommandMsg m{};
+    if (m.decode(data, 0, size) != size) {
+      ++self->malformed_;
+      return;
+    }
+    // the sample it answers: no older than allowed, not ahead of the newest one sent
+    if (m.step > self->sample_step_ || m.step < self->sample_step_ - self->max_age_steps_) {
+      ++self->stale_;
+      return;
+    }
+    if (m.step <= self->last_step_) {  // the same sample again, or an older one: a repeat
+      ++self->repeated_;
+      return;
+    }
+    if (self->pending_count_ == self->pending_.size()) {
+      ++self->stale_;  // more than the buffer holds in one drain: the oldest is the one to drop
+      return;
+    }
+    self->last_step_ = m.step;
+    ++self->accepted_;
+    Command c{};
+    io::lcm::from_lcm(m, c);
+    self->pending_[self->pending_count_++] = c;
+  }
+
+  io::lcm::LcmBus& bus_;
+  std::string status_channel_, command_channel_;
+  std::vector<std::uint8_t> out_;
+  bool ok_ = false;
+  std::string error_;
+  std::int64_t sample_step_ = 0, max_age_steps_ = 0, last_step_ = -1;
+  std::array<Command, 16> pending_{};
+  std::size_t pending_count_ = 0;
+  std::int64_t accepted_ = 0, malformed_ = 0, stale_ = 0, repeated_ = 0;
+};
+
+}  // namespace ehpt::hil
