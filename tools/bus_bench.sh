@@ -43,7 +43,25 @@ else:
           f"{b['missed_ticks']} missed ticks of {t['count']}, {b['stale_samples']} stale samples")
 PY
 }
+# run_lcm NAME SCENARIO SETTINGS...: the same over LCM udpm, inside a private network namespace
+run_lcm() {
+  local name=$1 scenario=$2
+  shift 2
+  "$here/tests/targets/in_netns.sh" bash -c '"$1" plant "$2" --bus "$3" --lockstep --out "$4" --quiet "${@:6}" &
+    "$1" ecu "$2" --bus "$3" --quiet --idle-timeout-s 2 "${@:6}"; wait' sh \
+    "$ehpt" "$scenario" "lcm:udpm://239.255.76.67:7667?ttl=0" "$work/$name" x "$@"
+  /usr/bin/python3 - "$work/$name/summary.json" "$name" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+t = s["bus"]["round_trip_us"]
+print(f"{sys.argv[2]:34s} {t['count'] / s['run_wall_time_s']:8.0f} ECU periods/s, round trip "
+      f"p50 {t['p50']:.0f} us, p99 {t['p99']:.0f} us, max {t['max']:.0f} us")
+PY
+}
 run "lockstep psecu2 NEDC 200 s" psecu2_nedc lockstep --set solver.duration_s=200
 run "lockstep EV NEDC 200 s" ev_nedc lockstep --set solver.duration_s=200
+run_lcm "LCM udpm lockstep psecu2 200 s" psecu2_nedc --set solver.duration_s=200
+run_lcm "LCM udpm lockstep EV 200 s" ev_nedc --set solver.duration_s=200
+"$(dirname "$ehpt")/bench/ehpt_bench" --benchmark_filter=LcmMemq 2>/dev/null | grep -E "^BM_" || true
 run "wall clock EV, 1 ms steps, 20 s" ev_nedc wall --set solver.duration_s=20
 run "wall clock EV, 10 ms steps, 20 s" ev_nedc wall --set solver.duration_s=20 --set solver.step_s=0.01

@@ -320,6 +320,117 @@ class Safety(BusTest):
         self.assertEqual(bus["timeouts"], 0)
 
 
+LCM_URL = "lcm:udpm://239.255.76.67:7667?ttl=0"
+
+
+class Lcm(BusTest):
+    """Run inside tests/targets/in_netns.sh: a private network namespace, loopback multicast,
+    ttl=0 (no packet leaves it)."""
+
+    def setUp(self):
+        super().setUp()
+        if not os.environ.get("EHPT_IN_NETNS"):
+            self.skipTest("needs tests/targets/in_netns.sh (a private network namespace)")
+
+    def lcm_run(self, scenario, name, sets, *plant_args, ecu_args=()):
+        plant = start(["plant", scenario, "--bus", LCM_URL, "--out", str(self.tmp / name), "--quiet"]
+                      + list(plant_args) + [a for s in sets for a in ("--set", s)], self.tmp)
+        ecu = start(["ecu", scenario, "--bus", LCM_URL, "--idle-timeout-s", "2"] + list(ecu_args)
+                    + [a for s in sets for a in ("--set", s)], self.tmp)
+        self.procs += [plant, ecu]
+        return plant, ecu
+
+    def plain_reference(self, scenario, sets, name):
+        """LCM carries doubles: its reference is the plain in-process run (no codec)."""
+        out = self.tmp / name
+        r = run(["run", scenario, "--out", str(out), "--quiet"] + [a for s in sets for a in ("--set", s)])
+        self.assertEqual(r.returncode, 0, r.stderr)
+        return out
+
+    def test_lockstep_over_udpm_is_bit_identical_to_the_plain_run(self):
+        """ehpt plant and ehpt ecu as two processes over LCM udpm, lockstep: the EV (60 s) and
+        the paper's PSecu2 (200 s of NEDC) equal the in-process runs byte for byte. (The CAN
+        run of the same scenario equals its own reference, the one through the CAN codec: CAN
+        quantises, LCM does not; the two differ by the quantisation, checked small here.)"""
+        for scenario, seconds in (("ev_nedc", 60), ("psecu2_nedc", 200)):
+            sets = ["solver.duration_s=%d" % seconds]
+            ref = self.plain_reference(scenario, sets, scenario + "_ref")
+            plant, ecu = self.lcm_run(scenario, scenario, sets, "--lockstep")
+            rc, _, err = self.finish(plant)
+            self.assertEqual(rc, 0, err)
+            self.assertEqual(self.finish(ecu, 30)[0], 0)
+            self.assertEqual((ref / "timeseries.csv").read_bytes(), (self.tmp / scenario / "timeseries.csv").read_bytes(),
+                             scenario)
+            bus = json.loads((self.tmp / scenario / "summary.json").read_text())["bus"]
+            samples = seconds * 100 + 1
+            self.assertEqual(bus["transport"], LCM_URL)
+            self.assertEqual(bus["commands_applied"], samples)
+            # sample 0 goes out again each second until an ECU answers (the ECU may start later)
+            self.assertIn(bus["messages_out"] - samples, (0, 1, 2))
+            self.assertEqual(bus["messages_in"], samples)
+            self.assertEqual(sum(bus["rejected"].values()), 0)
+            self.assertEqual(bus["timeouts"], 0)
+            # against the run through the CAN codec: close, not equal
+            can_ref = self.reference(scenario, sets, scenario + "_can_ref")
+            a = json.loads((can_ref / "summary.json").read_text())
+            b = json.loads((self.tmp / scenario / "summary.json").read_text())
+            self.assertNotEqual((can_ref / "timeseries.csv").read_bytes(), (ref / "timeseries.csv").read_bytes())
+            self.assertAlmostEqual(a["distance_m"], b["distance_m"], delta=1e-3 * b["distance_m"])
+
+    def test_ecu_silence_and_recovery_over_lcm(self):
+        """Wall clock over LCM: ehpt ecu killed while the car accelerates (Sort1), restarted:
+        one timeout, the torque reference zero meanwhile, ecuTimeout ends after the restart."""
+        sets = ["solver.duration_s=8"]
+        plant, ecu = self.lcm_run("ev_sort1", "wall", sets)
+        time.sleep(2.5)
+        ecu.send_signal(signal.SIGKILL)
+        ecu.wait()
+        time.sleep(2.0)
+        ecu2 = start(["ecu", "ev_sort1", "--bus", LCM_URL, "--idle-timeout-s", "2", "--set", sets[0]], self.tmp)
+        self.procs.append(ecu2)
+        rc, _, err = self.finish(plant, 60)
+        self.assertEqual(rc, 0, err)
+        self.assertEqual(self.finish(ecu2, 30)[0], 0)
+        bus = json.loads((self.tmp / "wall" / "summary.json").read_text())["bus"]
+        self.assertEqual(bus["pacing"], "wall_clock")
+        self.assertEqual(bus["timeouts"], 1)
+        self.assertGreater(bus["safe_state_time_s"], 1.0)
+        self.assertLess(bus["safe_state_time_s"], 4.0)
+        rows = csv_rows(self.tmp / "wall" / "timeseries.csv")
+        # the silence in the timeseries (its place in simulated time depends on when the first
+        # ECU answered): one block of rows with the torque reference at zero while the driver
+        # asks for torque, 1 to 4 s long; before and after it the follower passes the request on
+        # (one sample late or so: wall clock)
+        safe = [i for i, r in enumerate(rows) if r["drive_torque_ref_Nm"] == 0.0 and r["driver_request_Nm"] > 1.0]
+        self.assertTrue(safe)
+        first, last = safe[0], safe[-1]
+        self.assertEqual(safe, list(range(first, last + 1)))
+        self.assertGreater(rows[last]["time_s"] - rows[first]["time_s"], 1.0)
+        self.assertLess(rows[last]["time_s"] - rows[first]["time_s"], 4.0)
+        followed = [r for r in rows[:first - 1] + rows[last + 2:] if r["time_s"] > 0.5]
+        self.assertTrue(followed)
+        self.assertTrue(all(abs(r["drive_torque_ref_Nm"] - r["driver_request_Nm"]) < 0.1 * abs(r["driver_request_Nm"]) + 1
+                            for r in followed),
+                        [(r["time_s"], r["drive_torque_ref_Nm"], r["driver_request_Nm"]) for r in followed][:5])
+
+    def test_no_multicast_route_is_one_line_and_no_folder(self):
+        """In a namespace whose loopback has no multicast route (a fresh machine's usual
+        failure), both commands say so in one line, exit 2, and make no folder."""
+        out = self.tmp / "never"
+        for cmd in (["plant", "ev_nedc", "--bus", LCM_URL, "--out", str(out)], ["ecu", "ev_nedc", "--bus", LCM_URL]):
+            r = subprocess.run(["unshare", "-n", "sh", "-c", 'ip link set lo up && exec "$@"', "sh", EHPT] + cmd,
+                               capture_output=True, text=True, timeout=60)
+            self.assertEqual(r.returncode, 2, r.stderr)
+            self.assertEqual(r.stderr.strip().splitlines(),
+                             ["error: %s: cannot open (usually no multicast route: 'ip route add 224.0.0.0/4 dev lo' "
+                              "for loopback, in a private network namespace: unshare -n; see the README)" % LCM_URL])
+        self.no_folder_at(out)
+
+    def no_folder_at(self, out):
+        self.assertFalse(out.exists())
+        self.assertFalse(list(out.parent.glob(out.name + ".partial-*")))
+
+
 class Vcan(BusTest):
     def test_plant_on_a_real_vcan0_with_ehpt_ecu_and_python_can(self):
         """Inside tools/vcan-vm.sh (a qemu guest with vcan0): ehpt plant on SocketCAN in lockstep
