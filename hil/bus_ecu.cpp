@@ -131,15 +131,19 @@ class LcmEcuWire {
 
   void summary(std::ostream& log) const {
     log << "messages in " << bus_.counters().received << ", out " << bus_.counters().published << ", malformed "
-        << malformed_;
+        << malformed_ << ", dropped " << dropped_;
   }
 
  private:
   static void on_message(const void* data, int size, void* user) {
     auto* self = static_cast<LcmEcuWire*>(user);
     SensorsMsg m{};
-    if (m.decode(data, 0, size) != size || self->pending_count_ == self->pending_.size()) {
+    if (m.decode(data, 0, size) != size) {
       ++self->malformed_;
+      return;
+    }
+    if (self->pending_count_ == self->pending_.size()) {  // more samples in one drain than it holds
+      ++self->dropped_;
       return;
     }
     Sensors s{};
@@ -155,7 +159,7 @@ class LcmEcuWire {
   std::array<Sensors, 16> pending_{};
   std::size_t pending_count_ = 0;
   std::uint32_t sequence_ = 0;
-  std::int64_t malformed_ = 0;
+  std::int64_t malformed_ = 0, dropped_ = 0;
 };
 
 template <class Wire, class Controller>

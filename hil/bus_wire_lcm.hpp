@@ -108,7 +108,7 @@ class LcmWire {
       return;
     }
     if (self->pending_count_ == self->pending_.size()) {
-      ++self->stale_;  // more than the buffer holds in one drain: the oldest is the one to drop
+      ++self->stale_;  // more fresh commands in one drain than the buffer holds: this one waits no more
       return;
     }
     self->last_step_ = m.step;
