@@ -131,30 +131,43 @@ TEST(LcmSpec, UrlsAreCheckedBeforeAnythingOpens) {
 }
 
 // The EV's follower as an LCM subscriber: it answers each sample inside the handler.
+// hostile: per sample also garbage, a command for an old and for a future sample (each with
+// a torque of 999 N m), and the real one twice.
 struct FollowerOnLcm {
   io::lcm::LcmBus* bus;
+  bool hostile = false;
   std::vector<std::uint8_t> out = std::vector<std::uint8_t>(64);
+  void send(std::int64_t step, double torque_Nm, std::int64_t utime) {
+    ehpt_lcm::ev_command_t c{};
+    c.utime = utime;
+    c.step = step;
+    c.driveTauRef_Nm = torque_Nm;
+    const int n = c.encode(out.data(), 0, static_cast<int>(out.size()));
+    bus->publish("EHPT_ECU_COMMAND", out.data(), n);
+  }
   static void on_sample(const void* data, int size, void* user) {
     auto* self = static_cast<FollowerOnLcm*>(user);
     ehpt_lcm::ev_sensors_t m{};
     if (m.decode(data, 0, size) != size) return;
-    ehpt_lcm::ev_command_t c{};
-    c.utime = m.utime;
-    c.step = m.step;
-    c.driveTauRef_Nm = m.driverRequest_Nm;  // what ecu::EvFollower does
-    const int n = c.encode(self->out.data(), 0, static_cast<int>(self->out.size()));
-    self->bus->publish("EHPT_ECU_COMMAND", self->out.data(), n);
+    if (self->hostile) {
+      const std::uint8_t garbage[5] = {1, 2, 3, 4, 5};
+      self->bus->publish("EHPT_ECU_COMMAND", garbage, sizeof garbage);
+      if (m.step >= 10) self->send(m.step - 10, 999.0, m.utime);  // the previous sample's
+      self->send(m.step + 10, 999.0, m.utime);                    // a sample not sent yet
+    }
+    self->send(m.step, m.driverRequest_Nm, m.utime);  // what ecu::EvFollower does
+    if (self->hostile) self->send(m.step, m.driverRequest_Nm, m.utime);  // again: a repeat
   }
 };
 
 // The plant in lockstep with the in-handler follower over `url`; returns mallocs per message.
-double lockstep_in_one_process(const std::string& url) {
+double lockstep_in_one_process(const std::string& url, bool hostile = false, std::string* report = nullptr) {
   const hil::Scenario sc = test::load(test::source_path("scenarios/ev_nedc.toml"), {"solver.duration_s=30"});
   std::string error;
   auto bus = io::lcm::LcmBus::open(url, error);
   EXPECT_TRUE(bus) << error;
   if (!bus) return -1.0;
-  FollowerOnLcm ecu{bus.get()};
+  FollowerOnLcm ecu{bus.get(), hostile};
   EXPECT_TRUE(bus->subscribe("EHPT_PLANT_STATUS", &FollowerOnLcm::on_sample, &ecu, error)) << error;
 
   hil::SimulationOptions opt;
@@ -183,6 +196,7 @@ double lockstep_in_one_process(const std::string& url) {
   std::string text;
   driver->report(summary, text);
   EXPECT_NE(summary.str().find("\"commands_applied\": 3001"), std::string::npos) << summary.str();
+  if (report != nullptr) *report = summary.str();
 
   auto ref = hil::make_simulation(sc, hil::SimulationOptions{});
   while (!ref->finished()) ref->run();
@@ -201,6 +215,16 @@ TEST(LcmMemq, LockstepInOneProcessIsBitIdenticalToTheInProcessRun) {
   const double per_message = lockstep_in_one_process("memq://");
   EXPECT_GT(per_message, 0.0);  // the counter counts (liblcm copies every message it queues)
   EXPECT_LE(per_message, 4.0);
+}
+
+TEST(LcmMemq, HostileMessagesAreCountedByReasonAndChangeNothing) {
+  std::string j;
+  lockstep_in_one_process("memq://", true, &j);  // bit-identical: checked inside
+  // per sample (3001): garbage, an old and a future sample's command, the real one twice
+  for (const char* want : {"\"malformed\": 3001", "\"stale\": 6001", "\"repeated\": 3001",
+                           "\"messages_accepted\": 3001"}) {
+    EXPECT_NE(j.find(want), std::string::npos) << want << " in " << j;
+  }
 }
 
 // udpm only inside tests/targets/in_netns.sh (ctest: lcm_udpm_in_netns): the same, over the
