@@ -72,7 +72,6 @@ class BusPlant final : public ExternalDriver {
         pacer_.wait_for_step(sim.step_index());
         period_error_.record(clock_.now_ns() - pacer_.last_deadline_ns());
       }
-      wire_.maybe_flush();
     }
   }
 

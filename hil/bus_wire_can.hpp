@@ -89,10 +89,6 @@ class CanWire {
     }
     return write_log(error);
   }
-  // In the run loop: bus.log when enough is buffered (a failure is kept for flush()).
-  void maybe_flush() {
-    if (log_buf_.size() > kLogFlushBytes) write_log(log_error_);
-  }
 
   // The wire's figures into summary.json's "bus"; rejected: their total.
   void report(io::JsonObject& b, std::int64_t& rejected) const {
@@ -129,9 +125,14 @@ class CanWire {
     clock_gettime(CLOCK_REALTIME, &ts);
     return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
   }
+  // Every frame in and out; written out once enough is buffered (also while a lockstep wait
+  // takes in a flood), so the buffer stays within its reserve. A failure is kept for flush().
   void log_frames(std::span<const io::can::Frame> frames) {
     const double t = wall_time_s();
-    for (const auto& f : frames) io::can::append_candump_line(log_buf_, t, log_interface_, f);
+    for (const auto& f : frames) {
+      io::can::append_candump_line(log_buf_, t, log_interface_, f);
+      if (log_buf_.size() > kLogFlushBytes) write_log(log_error_);
+    }
   }
   bool write_log(std::string& error) {
     if (!error.empty()) {  // failed before: bus.log is incomplete, keep memory bounded

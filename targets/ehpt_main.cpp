@@ -357,6 +357,10 @@ struct BusArgs {
   std::vector<std::string> sets;
   bool lockstep = false, quiet = false;
   double command_timeout_s = 0.0, lockstep_wait_s = 1.0, ecu_wait_s = 60.0, idle_timeout_s = 10.0, max_samples = 0.0;
+  // --bus, checked: an LCM URL, or a CAN transport
+  bool lcm = false;
+  std::string lcm_url;
+  ehpt::io::can::BusSpec spec;
 };
 
 // 0: parsed; else the exit code.
@@ -417,6 +421,13 @@ int parse_bus_args(const std::vector<std::string>& args, bool plant, const char*
     std::cerr << (a.scenario.empty() ? "a scenario is needed\n" : "--bus is needed\n") << help;
     return 1;
   }
+  a.lcm = a.bus.rfind("lcm:", 0) == 0;
+  std::string error;
+  if (a.lcm ? !ehpt::io::lcm::parse_lcm_spec(a.bus, a.lcm_url, error)
+            : !ehpt::io::can::parse_bus_spec(a.bus, a.spec, error)) {
+    std::cerr << error << "\n";
+    return 1;
+  }
   return 0;
 }
 
@@ -432,13 +443,6 @@ int cmd_plant(const std::vector<std::string>& args) {
   if (wants_help(args)) return out(kPlantHelp) ? 0 : 1;
   BusArgs a;
   if (const int rc = parse_bus_args(args, true, kPlantHelp, a); rc != 0) return rc;
-  const bool lcm = a.bus.rfind("lcm:", 0) == 0;
-  ehpt::io::can::BusSpec spec;
-  std::string error, lcm_url;
-  if (lcm ? !ehpt::io::lcm::parse_lcm_spec(a.bus, lcm_url, error) : !ehpt::io::can::parse_bus_spec(a.bus, spec, error)) {
-    std::cerr << error << "\n";
-    return 1;
-  }
   ehpt::hil::Scenario sc;
   if (const int rc = load(a.scenario, a.sets, sc); rc != 0) return rc;
   if (!a.quiet) {
@@ -449,26 +453,27 @@ int cmd_plant(const std::vector<std::string>& args) {
   bo.command_timeout_s = a.command_timeout_s;
   bo.lockstep_wait_s = a.lockstep_wait_s;
   bo.peer_wait_s = a.ecu_wait_s;
-  bo.log_interface = spec.interface_name;
+  bo.log_interface = a.spec.interface_name;
   bo.lcm_prefix = a.lcm_prefix;
-  // the bus first: a bus that cannot open leaves no output folder behind
-  std::unique_ptr<ehpt::io::can::Transport> bus;
-  std::unique_ptr<ehpt::hil::ExternalDriver> driver;
-  std::string why;
+  std::string error, why;
   if (!ehpt::hil::can_run_on_bus(sc, why)) {
     std::cerr << "error: " << why << "\n";
     return 2;
   }
+  // the bus first: a bus that cannot open leaves no output folder behind. The driver refers
+  // to the bus: declared after it, destroyed before it.
+  std::unique_ptr<ehpt::io::can::Transport> bus;
   std::unique_ptr<ehpt::io::lcm::LcmBus> lcm_bus;
-  if (lcm) {
-    lcm_bus = ehpt::io::lcm::LcmBus::open(lcm_url, error);
+  std::unique_ptr<ehpt::hil::ExternalDriver> driver;
+  if (a.lcm) {
+    lcm_bus = ehpt::io::lcm::LcmBus::open(a.lcm_url, error);
     if (!lcm_bus) {
       std::cerr << "error: " << error << "\n";
       return 2;
     }
     driver = ehpt::hil::make_bus_plant(sc, *lcm_bus, bo, why);
   } else {
-    bus = ehpt::io::can::open_bus(spec, ehpt::io::can::BusRole::kPlant, rx_ids(sc, true), error);
+    bus = ehpt::io::can::open_bus(a.spec, ehpt::io::can::BusRole::kPlant, rx_ids(sc, true), error);
     if (!bus) {
       std::cerr << "error: " << error << "\n";
       return 2;
@@ -492,7 +497,7 @@ int cmd_plant(const std::vector<std::string>& args) {
   if (!a.quiet) {
     std::string text = r.summary_text;
     if (!r.results_dir.empty()) {
-      text += "outputs       " + r.results_dir + "/timeseries.csv, summary.json" + (lcm ? "" : ", bus.log") + "\n";
+      text += "outputs       " + r.results_dir + "/timeseries.csv, summary.json" + (a.lcm ? "" : ", bus.log") + "\n";
     }
     printed = out(text);
   }
@@ -504,15 +509,9 @@ int cmd_ecu(const std::vector<std::string>& args) {
   if (wants_help(args)) return out(kEcuHelp) ? 0 : 1;
   BusArgs a;
   if (const int rc = parse_bus_args(args, false, kEcuHelp, a); rc != 0) return rc;
-  const bool lcm = a.bus.rfind("lcm:", 0) == 0;
-  ehpt::io::can::BusSpec spec;
-  std::string error, lcm_url;
-  if (lcm ? !ehpt::io::lcm::parse_lcm_spec(a.bus, lcm_url, error) : !ehpt::io::can::parse_bus_spec(a.bus, spec, error)) {
-    std::cerr << error << "\n";
-    return 1;
-  }
   ehpt::hil::Scenario sc;
   if (const int rc = load(a.scenario, a.sets, sc); rc != 0) return rc;
+  std::string error;
   if (!ehpt::hil::has_bus_ecu(sc, error)) {
     std::cerr << "error: " << error << "\n";
     return 2;
@@ -520,8 +519,8 @@ int cmd_ecu(const std::vector<std::string>& args) {
   ehpt::hil::BusEcuOptions eo;
   eo.idle_timeout_s = a.idle_timeout_s;
   eo.max_samples = static_cast<std::int64_t>(a.max_samples);
-  if (lcm) {
-    const auto lcm_bus = ehpt::io::lcm::LcmBus::open(lcm_url, error);
+  if (a.lcm) {
+    const auto lcm_bus = ehpt::io::lcm::LcmBus::open(a.lcm_url, error);
     if (!lcm_bus) {
       std::cerr << "error: " << error << "\n";
       return 2;
@@ -531,7 +530,7 @@ int cmd_ecu(const std::vector<std::string>& args) {
     if (!a.quiet && !out(log.str())) return 1;
     return r.exit_code;
   }
-  const auto bus = ehpt::io::can::open_bus(spec, ehpt::io::can::BusRole::kEcu, rx_ids(sc, false), error);
+  const auto bus = ehpt::io::can::open_bus(a.spec, ehpt::io::can::BusRole::kEcu, rx_ids(sc, false), error);
   if (!bus) {
     std::cerr << "error: " << error << "\n";
     return 2;

@@ -242,6 +242,9 @@ constexpr std::size_t kMaxClients = 8;
 // after its last "< ok >", a client gets frames only this much later, so that its read of
 // the "< ok >" cannot hold a frame too (python-can compares that read with "< ok >")
 constexpr std::int64_t kSettleNs = 50'000'000;
+// a client that has not reached raw mode this long after connecting loses its slot (the
+// handshake takes milliseconds; 8 silent connections must not lock the ECU out)
+constexpr std::int64_t kHandshakeNs = 5'000'000'000;
 
 class Server final : public Transport {
  public:
@@ -313,6 +316,7 @@ class Server final : public Transport {
     Stream stream;
     State state = State::kFree;
     std::int64_t live_after_ns = 0;
+    std::int64_t accepted_ns = 0;  // a client still in its handshake after kHandshakeNs is dropped
   };
 
   static bool live(const Client& c, std::int64_t now) { return c.state == State::kRaw && now >= c.live_after_ns; }
@@ -344,11 +348,17 @@ class Server final : public Transport {
       slot->stream.fd = fd;
       slot->stream.in_len = slot->stream.out_len = 0;
       slot->state = State::kHello;
+      slot->accepted_ns = now_ns();
       if (!slot->stream.write_alone("< hi >")) drop(*slot);
     }
     const std::int64_t now = now_ns();
     for (auto& c : clients_) {
       if (c.state == State::kFree) continue;
+      if (c.state != State::kRaw && now - c.accepted_ns > kHandshakeNs) {  // a silent client frees its slot
+        ++counters_.error_frames;
+        drop(c);
+        continue;
+      }
       const bool open = c.stream.read_some();
       std::size_t consumed = 0;
       // while the plant has not taken what came in, the rest waits in the socket (TCP's

@@ -2,7 +2,8 @@
 // socketcand endpoints (the TCP text protocol of linux-can/socketcand, raw mode), so that
 // python-can's interface="socketcand" and other socketcand clients reach the plant on
 // machines whose kernel has no CAN.
-//   Server (the plant): listens on HOST:PORT and serves one bus. Per client: "< hi >";
+//   Server (the plant): listens on HOST:PORT and serves one bus to up to 8 clients (one
+//   that has not finished its handshake after 5 s is dropped). Per client: "< hi >";
 //   "< open CHANNEL >" -> "< ok >"; "< rawmode >" -> "< ok >"; then every frame on the bus
 //   goes to it as " < frame ID SECS.USECS DATA >" and its "< send ID LEN B0 B1 ... >" frames
 //   reach the plant and the other clients (a bus: everyone hears everyone else).

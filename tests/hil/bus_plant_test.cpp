@@ -8,6 +8,7 @@
 #include <cstring>
 #include <deque>
 #include <filesystem>
+#include <stdlib.h>  // mkdtemp
 #include <unistd.h>
 
 #include "alloc_counter.hpp"
@@ -149,10 +150,11 @@ BusRun run_on(FollowerBus& bus, const Scenario& sc, const std::string& out_dir) 
   return r;
 }
 
+// an output folder name inside a folder this process made (mkdtemp): nothing else is touched
 std::string fresh(const char* name) {
-  const auto p = std::filesystem::temp_directory_path() / ("ehpt-bus-plant-" + std::to_string(::getpid()) + "-" + name);
-  std::filesystem::remove_all(p);  // ours: named with this process's id
-  return p.string();
+  std::string base = (std::filesystem::temp_directory_path() / "ehpt-bus-plant-XXXXXX").string();
+  EXPECT_NE(::mkdtemp(base.data()), nullptr);
+  return base + "/" + name;
 }
 
 // the in-process reference: the built-in follower through the same codec

@@ -74,7 +74,10 @@ def finish(p, timeout_s=120):
 
 def start_logger(log, log_dir, name):
     """lcm-logger on every channel (its default .*); given time to subscribe before traffic."""
-    p = start(["lcm-logger", "--quiet", "--force", "--lcm-url=" + URL, str(log)], log_dir, name)
+    # ahead of the lockstep pair in the scheduler (root may raise it): a bystander that falls
+    # behind loses messages inside liblcm
+    nice = ["nice", "-n", "-10"] if os.geteuid() == 0 else []
+    p = start(nice + ["lcm-logger", "--quiet", "--force", "--lcm-url=" + URL, str(log)], log_dir, name)
     time.sleep(0.5)
     if p.poll() is not None:
         raise AssertionError("lcm-logger ended at once: " + finish(p)[2])
@@ -118,17 +121,18 @@ def log_check(tool, log):
     return r.returncode, r.stdout.strip(), r.stderr.strip()
 
 
-def session(ehpt, tool, ecu_args, tmp, name, duration_s=DURATION_S, attempts=3):
+def session(ehpt, tool, ecu_args, tmp, name, duration_s=DURATION_S, attempts=5, logged=True):
     """One lockstep session recorded by lcm-logger: the ECU first (LCM has no connections, an ECU
     that is late makes the plant re-send sample 0), then the plant. -> (plant dir, log, ECU stdout)
     lcm-logger is a bystander nothing waits for: on a busy host liblcm (1.3.1) dropped messages
     inside it (measured: 21 in a row, none counted by the kernel as UDP drops). A session whose
-    plant took every command but whose log is short is therefore recorded again (said so)."""
+    plant took every command but whose log is short is therefore recorded again (said so).
+    logged=False: a session that only compares timeseries, with no logger (and no log checks)."""
     n = duration_s * 100 + 1
     expected = "status %d command %d first_step 0 last_step %d" % (n, n, (n - 1) * 10)
     for attempt in range(1, attempts + 1):
         log, out = tmp / ("%s-%d.lcmlog" % (name, attempt)), tmp / ("%s-%d" % (name, attempt))
-        logger = start_logger(log, tmp, "%s-%d-logger" % (name, attempt))
+        logger = start_logger(log, tmp, "%s-%d-logger" % (name, attempt)) if logged else None
         t0 = time.monotonic()
         ecu = start(ecu_args, tmp, "%s-%d-ecu" % (name, attempt))
         time.sleep(0.3)
@@ -138,8 +142,10 @@ def session(ehpt, tool, ecu_args, tmp, name, duration_s=DURATION_S, attempts=3):
         t_plant = time.monotonic() - t0
         ecu_rc, ecu_out, ecu_err = finish(ecu)
         t_ecu = time.monotonic() - t0
-        logger_rc, _, logger_err = stop_logger(logger)
         bus = json.loads((out / "summary.json").read_text())["bus"] if (out / "summary.json").exists() else {}
+        if not logged:
+            break
+        logger_rc, _, logger_err = stop_logger(logger)
         rc, line, err = log_check(tool, log)
         plant_clean = plant.returncode == 0 and bus.get("messages_out") == n and bus.get("commands_applied") == n
         if (rc != 0 or line != expected) and plant_clean and attempt < attempts:
@@ -150,6 +156,8 @@ def session(ehpt, tool, ecu_args, tmp, name, duration_s=DURATION_S, attempts=3):
     print("     %s: plant done after %.2f s, ECU after %.2f s (its idle timeout included)" % (name, t_plant, t_ecu))
     check(plant.returncode == 0, "%s: ehpt plant exits 0 (%s)" % (name, plant.stderr.strip()[-300:]))
     check(ecu_rc == 0, "%s: the ECU exits 0 (%s)" % (name, (ecu_out + ecu_err).strip()[-300:]))
+    if not logged:
+        return out, None, ecu_out
     check(logger_rc == 0 and log.exists(), "%s: lcm-logger wrote %s (%s)" % (name, log.name, logger_err.strip()))
     check(rc == 0 and line == expected, "%s: lcm_log_check: '%s' (expected '%s') %s" % (name, line, expected, err))
     counts = line.split()
@@ -256,11 +264,11 @@ def test_main(ehpt, tool, example):
     r = subprocess.run([ehpt, "run", SCENARIO, "--quiet", "--out", str(ref)] + long_sets, capture_output=True,
                        text=True, timeout=120)
     drive_out, _, _ = session(ehpt, tool, [example, "--url", URL, "--idle-timeout-s", "1"], tmp, "example_driving",
-                              DRIVING_S)
+                              DRIVING_S, logged=False)
     check(r.returncode == 0 and (ref / "timeseries.csv").read_bytes() == (drive_out / "timeseries.csv").read_bytes(),
           "%d s (driving): timeseries.csv with the example ECU == ehpt run's (byte for byte)" % DRIVING_S)
     lim_out, _, _ = session(ehpt, tool, [example, "--url", URL, "--idle-timeout-s", "1", "--torque-limit-Nm", "50"],
-                            tmp, "example_limited", DRIVING_S)
+                            tmp, "example_limited", DRIVING_S, logged=False)
     ask = [float(row["driver_request_Nm"]) for row in csv_rows(drive_out)]
     got = [float(row["drive_torque_ref_Nm"]) for row in csv_rows(lim_out)]
     check(max(map(abs, ask)) > 50 and max(map(abs, got)) <= 50 and max(map(abs, got)) > 49,
@@ -271,8 +279,14 @@ def test_main(ehpt, tool, example):
     checker_rejects(tool, log, tmp)
 
     # 4. replay the first session's log in a second namespace, recorded afresh
-    replay_log = tmp / "replayed.lcmlog"
-    rc = in_new_netns([os.path.abspath(__file__), "--replay", str(log), str(replay_log)])
+    # (the recording lcm-logger is a bystander that can lose messages on a busy host, as in
+    # session(): a replay whose log is short is replayed again, said so, at most 5 times)
+    for attempt in range(1, 6):
+        replay_log = tmp / ("replayed-%d.lcmlog" % attempt)
+        rc = in_new_netns([os.path.abspath(__file__), "--replay", str(log), str(replay_log)])
+        if rc != 0 or not replay_log.exists() or read_lcm_log(log) == read_lcm_log(replay_log) or attempt == 5:
+            break
+        print("     replay: the replayed log is short (%s): replayed again" % log_check(tool, replay_log)[1])
     check(rc == 0 and replay_log.exists(), "lcm-logplayer replayed the log in a second namespace, lcm-logger "
           "recorded it")
     if replay_log.exists():

@@ -1,0 +1,75 @@
+// The socketcand server (io/can/socketcand.hpp) on 127.0.0.1: eight clients that connect and
+// never finish their handshake cannot lock an ECU out; their slots are freed after 5 s.
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <thread>
+#include <vector>
+
+#include "io/can/socketcand.hpp"
+
+namespace ehpt::io::can {
+namespace {
+
+int connect_to(std::uint16_t port) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_port = htons(port);
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  EXPECT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+  return fd;
+}
+
+// a free port: bound to 0 by the kernel, then released
+std::uint16_t free_port() {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a);
+  socklen_t len = sizeof a;
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
+  ::close(fd);
+  return ntohs(a.sin_port);
+}
+
+TEST(SocketcandServer, SilentClientsLoseTheirSlotsAndAnEcuGetsIn) {
+  const std::uint16_t port = free_port();
+  std::string error;
+  auto server = open_socketcand_server("127.0.0.1", port, error);
+  ASSERT_TRUE(server) << error;
+  std::vector<int> silent;
+  for (int i = 0; i < 8; ++i) silent.push_back(connect_to(port));
+  Frame none[4];
+  server->receive(none);  // accepts them: every slot taken
+  // an ECU now: refused (closed at once) while every slot is taken; it tries again
+  std::unique_ptr<Transport> ecu;
+  std::thread client([&] {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(9);
+    while (!ecu && std::chrono::steady_clock::now() < until) {
+      ecu = open_socketcand_client("127.0.0.1", port, "can0", 1.0, error);
+      if (!ecu) std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    }
+  });
+  const auto start = std::chrono::steady_clock::now();
+  while (!server->has_peer() && std::chrono::steady_clock::now() - start < std::chrono::seconds(9)) {
+    server->wait(50'000'000);
+    server->receive(none);
+  }
+  client.join();
+  const double waited_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_TRUE(ecu) << error;
+  EXPECT_TRUE(server->has_peer());
+  EXPECT_GT(waited_s, 4.0);  // the silent ones had their 5 s
+  EXPECT_GE(server->counters().error_frames, 8);
+  for (int fd : silent) ::close(fd);
+}
+
+}  // namespace
+}  // namespace ehpt::io::can
