@@ -15,9 +15,13 @@
 //      Iq(Id) = T* / (1.5 pp (psi - dL Id)), Id bracketed in [-psi/Ld, Id_MTPA].
 //   3. No Id in the bracket meets the voltage: T* is not reachable at this speed: the largest
 //      reachable torque (bisection on T*), voltage_limited set (flux weakening has priority).
-// Current limit (PmsmAllFluxLimI, algebraic form, §9.1 recommendation): if Id^2 + Iq^2 >
-// 2 I_lim^2 (I_lim rms), keep Id and cut |Iq| to sqrt(2 I_lim^2 - Id^2): priority to flux
-// weakening; if Id alone exceeds it, overload is flagged and both are kept.
+// Current limit (PmsmAllFluxLimI, §9.1), with priority to flux weakening: if the point above
+// needs |I| > sqrt 2 I_lim, the torque gives way to the largest one within both limits: MTPA
+// at the limit if its voltage fits (below base speed), else the corner of the current circle
+// and the voltage ellipse (Illinois along the circle). Not §9.1's algebraic "keep Id, cut Iq"
+// (see the .cpp: it is not continuous in speed). If even all the current in Id cannot hold the
+// voltage (above speed_max_rad_s, which validate() checks), overload is flagged and the
+// currents are kept.
 // Losses and DC power: P_dc = Te wm + 1.5 Rs I^2 + k_inv I_rms (I = sqrt(Id^2 + Iq^2)).
 
 #include <string>
@@ -35,7 +39,16 @@ struct PmDriveParams {
   double U_max_rms_V = 100.0;    // phase voltage limit, rms
   double I_lim_rms_A = 100.0;    // current limit, rms
   double k_inv_W_per_A = 4.0;    // inverter loss per A rms (V16 Inverter, §9.1)
+  double inertia_kgm2 = 0.29;    // rotor (MSL default machine)
+  // Highest rotor speed the drive is rated for: at it, holding |V| = U_max at no load takes
+  // |Id| = (psi - sqrt 2 U_max / (pp w_max)) / Ld, which must fit in the current limit.
+  // 317 rad/s is SmaAllSpeeds' end speed (§11.6), where that current is 99.6 A rms.
+  double speed_max_rad_s = 317.0;
 };
+
+// The no-load current (rms) that flux weakening needs to hold |V| at the set voltage at
+// speed w (0 below base speed).
+double pm_no_load_current_rms_A(const PmDriveParams& p, double speed_rad_s);
 
 void validate(const PmDriveParams& p, const std::string& at, Problems& problems);
 
@@ -51,6 +64,10 @@ struct PmOperatingPoint {
   bool converged = true;          // every iteration met its tolerance (else a fault flag)
   int iterations = 0;
 };
+
+// MTPA torque at the current limit (|I| = sqrt 2 I_lim): the most the drive gives below base
+// speed. MTPA at current I: Id = (psi - sqrt(psi^2 + 8 dL^2 I^2)) / (4 dL), Iq = sqrt(I^2 - Id^2).
+double pm_torque_at_current_limit_Nm(const PmDriveParams& p);
 
 // The peak phase-voltage limit for a DC voltage.
 double pm_voltage_limit_V(const PmDriveParams& p, double u_dc_V);

@@ -109,23 +109,43 @@ TEST(PmDrive, RegenerationMirrorsMotoringAtStandstill) {
   EXPECT_NEAR(g.torque_Nm, -90.0, 1e-9);
 }
 
-TEST(PmDrive, TheCurrentLimitCutsIqAndKeepsIdForFluxWeakening) {
-  const PmDriveParams p = anisotropic();
-  PmDriveParams unlimited = p;
-  unlimited.I_lim_rms_A = 1e6;
-  for (double w : {10.0, 120.0}) {  // MTPA, and flux weakening
-    const double t = w < 50 ? 400.0 : 300.0;  // beyond the 141 A peak either way (187 A at 120 rad/s)
-    const PmOperatingPoint free = pm_operating_point(unlimited, t, w, 300.0);
-    const PmOperatingPoint op = pm_operating_point(p, t, w, 300.0);
-    ASSERT_FALSE(free.voltage_limited) << w;
-    EXPECT_EQ(free.weakening, w > 50) << w;
-    EXPECT_TRUE(op.current_limited) << w;
-    EXPECT_NEAR(amplitude(op), std::sqrt(2.0) * p.I_lim_rms_A, 1e-9) << w;
-    EXPECT_EQ(op.id_A, free.id_A) << w;  // priority to flux weakening: Id as it was
-    EXPECT_LT(op.torque_Nm, t) << w;
-    EXPECT_GT(op.torque_Nm, 0.0) << w;  // (99 N m at 120 rad/s: the weakening Id for 300 N m stays)
-    EXPECT_LE(voltage(op), pm_voltage_limit_V(p, 300.0) * (1 + 1e-9)) << w;
+// The largest torque on the current circle |I| = I_max whose voltage fits, by brute force.
+double best_torque_on_the_circle(const PmDriveParams& p, double w, double U) {
+  const double i_peak = std::sqrt(2.0) * p.I_lim_rms_A;
+  double best_Nm = 0.0;
+  for (int k = 0; k <= 200000; ++k) {
+    const double beta = 0.5 * M_PI * k / 200000.0;  // Id = -I sin(beta), Iq = I cos(beta)
+    const double id = -i_peak * std::sin(beta), iq = i_peak * std::cos(beta);
+    const double vd = p.Rs_Ohm * id - p.pole_pairs * w * p.Lq_H * iq;
+    const double vq = p.Rs_Ohm * iq + p.pole_pairs * w * (p.psi_pm_Wb + p.Ld_H * id);
+    if (std::hypot(vd, vq) <= U) {
+      best_Nm = std::max(best_Nm, 1.5 * p.pole_pairs * (p.psi_pm_Wb * iq + (p.Ld_H - p.Lq_H) * id * iq));
+    }
   }
+  return best_Nm;
+}
+
+// Below base speed the current limit gives MTPA at the limit; in flux weakening the corner
+// of the current circle and the voltage ellipse. Either way: the largest torque with
+// |I| <= I_max and |V| <= U_lim (brute force along the circle), the voltage never above it.
+TEST(PmDrive, TheCurrentLimitGivesTheLargestTorqueWithinCurrentAndVoltage) {
+  const PmDriveParams p = anisotropic();
+  const double U = pm_voltage_limit_V(p, 300.0), i_peak = std::sqrt(2.0) * p.I_lim_rms_A;
+  for (double w : {10.0, 120.0, 300.0}) {  // MTPA; weakening; deep weakening (Id of 250 N m alone > I_max)
+    const double t = w < 50 ? 400.0 : 250.0;
+    const PmOperatingPoint op = pm_operating_point(p, t, w, 300.0);
+    EXPECT_TRUE(op.current_limited) << w;
+    EXPECT_FALSE(op.overload) << w;
+    EXPECT_EQ(op.weakening, w > 50) << w;
+    EXPECT_NEAR(amplitude(op), i_peak, 1e-6 * i_peak) << w;
+    EXPECT_LE(amplitude(op), i_peak * (1 + 1e-12)) << w;
+    EXPECT_LE(voltage(op), U * (1 + 1e-9)) << w;
+    const double best_Nm = best_torque_on_the_circle(p, w, U);
+    ASSERT_GT(best_Nm, 10.0) << w;
+    EXPECT_NEAR(op.torque_Nm, best_Nm, 1e-4 * best_Nm) << w;
+  }
+  // below base speed that is MTPA at the limit, pm_torque_at_current_limit_Nm (closed form)
+  EXPECT_NEAR(pm_operating_point(p, 400.0, 10.0, 300.0).torque_Nm, pm_torque_at_current_limit_Nm(p), 1e-6);
 }
 
 TEST(PmDrive, AnUnreachableTorqueGivesTheLargestReachableOneWithinTheVoltage) {
@@ -151,6 +171,75 @@ TEST(PmDrive, PowersBalance) {
     EXPECT_NEAR(p_ac, op.torque_Nm * w + 1.5 * p.Rs_Ohm * i2, 1e-9 * std::abs(p_ac));
     EXPECT_NEAR(op.p_dc_W, p_ac + p.k_inv_W_per_A * std::sqrt(i2 / 2), 1e-9 * std::abs(p_ac));
   }
+}
+
+// SmaAllSpeeds (MODELS.md §11.6): speed imposed 0 -> 317 rad/s, 300 N m asked, I_lim 100 A
+// rms, U_max 100 V rms, u_DC 300 V. Expected: the current held at 100 A rms; the voltage rises
+// linearly, then clamps at 100 V rms; the torque stays below 300 N m; the active power rises,
+// peaks and falls; the reactive power crosses zero at the active-power peak.
+TEST(PmDrive, SmaAllSpeedsAsTheLibraryTestShows) {
+  const PmDriveParams p = anisotropic();
+  const double i_peak = std::sqrt(2.0) * 100.0, u_peak = std::sqrt(2.0) * 100.0;
+  double p_max = -1.0, w_at_p_max = 0.0, w_q_zero = -1.0, q_before = 0.0, w_clamp = -1.0;
+  double v20 = 0.0, v90 = 0.0;
+  for (int k = 1; k <= 3170; ++k) {
+    const double w = 0.1 * k;
+    const PmOperatingPoint op = pm_operating_point(p, 300.0, w, 300.0);
+    ASSERT_TRUE(op.converged) << w;
+    EXPECT_NEAR(amplitude(op), i_peak, 1e-6 * i_peak) << w;  // current held at 100 A rms
+    EXPECT_LT(op.torque_Nm, 300.0) << w;
+    EXPECT_LE(voltage(op), u_peak * (1 + 1e-12)) << w;
+    const double active_W = 1.5 * (op.vd_V * op.id_A + op.vq_V * op.iq_A);
+    const double reactive_var = 1.5 * (op.vq_V * op.id_A - op.vd_V * op.iq_A);
+    if (active_W > p_max) {
+      p_max = active_W;
+      w_at_p_max = w;
+    }
+    if (k > 1 && w_q_zero < 0 && (reactive_var > 0) != (q_before > 0)) w_q_zero = w;
+    q_before = reactive_var;
+    if (w_clamp < 0 && voltage(op) > u_peak * (1 - 1e-9)) w_clamp = w;
+    if (k == 200) v20 = voltage(op);
+    if (k == 900) v90 = voltage(op);
+    if (k > 900 && w_clamp < 0) {
+      // below the clamp the currents are fixed, the voltage rises on a straight line (the
+      // Rs I part is 6 V of 141, at right angles to most of the rest)
+      EXPECT_NEAR(voltage(op), v20 + (v90 - v20) * (w - 20.0) / 70.0, 0.01 * u_peak) << w;
+    }
+  }
+  // the clamp: base speed of the 100 A rms MTPA point, well inside the sweep
+  EXPECT_GT(w_clamp, 50.0);
+  EXPECT_LT(w_clamp, 150.0);
+  // the active power peaks inside the sweep, then falls
+  EXPECT_GT(w_at_p_max, w_clamp);
+  EXPECT_LT(w_at_p_max, 310.0);
+  const PmOperatingPoint end = pm_operating_point(p, 300.0, 317.0, 300.0);
+  EXPECT_LT(1.5 * (end.vd_V * end.id_A + end.vq_V * end.iq_A), 0.95 * p_max);
+  // the reactive power crosses zero where the active power peaks (unity power factor: at
+  // constant |V| and |I| the active power 1.5 |V||I| cos(phi) is largest where phi = 0)
+  ASSERT_GT(w_q_zero, 0.0);
+  EXPECT_NEAR(w_q_zero, w_at_p_max, 0.03 * w_at_p_max);
+}
+
+TEST(PmDrive, ACurrentLimitBelowTheNoLoadCurrentAtTopSpeedIsNamed) {
+  PmDriveParams p = anisotropic();
+  // at 317 rad/s, holding 141 V needs Id = (0.5055 - 141.42 / 634) / 2e-3 = 141.2 A peak
+  EXPECT_NEAR(pm_no_load_current_rms_A(p, 317.0), (0.5055 - std::sqrt(2.0) * 100.0 / 634.0) / 2e-3 / std::sqrt(2.0), 1e-9);
+  EXPECT_EQ(pm_no_load_current_rms_A(p, 100.0), 0.0);  // below base speed: none
+  // above the rated speed holding the voltage needs more than the limit even at no load:
+  // flagged as overload (the currents are what the voltage needs)
+  const PmOperatingPoint beyond = pm_operating_point(p, 50.0, 400.0, 300.0);
+  EXPECT_TRUE(beyond.overload);
+  EXPECT_GE(std::abs(beyond.id_A), std::sqrt(2.0) * pm_no_load_current_rms_A(p, 400.0));  // more with torque
+  EXPECT_FALSE(pm_operating_point(p, 50.0, 317.0, 300.0).overload);
+  Problems ok;
+  validate(p, "drive", ok);
+  EXPECT_TRUE(ok.empty());
+  p.I_lim_rms_A = 90.0;
+  Problems problems;
+  validate(p, "drive", problems);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_EQ(problems.list()[0].field, "drive.I_lim_rms_A");
+  EXPECT_EQ(problems.list()[0].value, "90");
 }
 
 TEST(PmDrive, ImpossibleMachineDataIsNamed) {
