@@ -6,12 +6,16 @@
 //   BM_Psecu2Step:        the paper's PSecu2 (NEDC, h = 1 ms): ECU update + one advance()
 //   BM_Psecu2Run_nedc:    the whole 1400 s run through the runner with the ECU
 //   BM_OneFlangeStep:     one step of the TestMBOneFlange rig
+//   BM_EvRun_sort1/<vehicle>: a whole Sort1 run (150 s, RK4, h = 1 ms) of the map-based EV and
+//                         the machine-drive EVs side by side (EvPm_bat: MTPA / flux weakening
+//                         solved at every RK4 stage; EvAm_bat: the equivalent circuit)
 #include <benchmark/benchmark.h>
 
 #include "hil/config.hpp"
 #include "hil/runner.hpp"
 #include "plant/bev_plant.hpp"
 #include "plant/drive_rigs.hpp"
+#include "plant/ev_machine_plant.hpp"
 #include "plant/psd_plant.hpp"
 #include "solvers/event_stepper.hpp"
 
@@ -155,3 +159,32 @@ BENCHMARK(BM_OneFlangeStep);
 }  // namespace
 
 BENCHMARK_MAIN();
+
+namespace {
+
+// A whole run of a vehicle with the follower ECU through the runner, as `ehpt run` does it.
+template <class Plant>
+void BM_EvRun(benchmark::State& state, const char* scenario) {
+  const hil::Scenario sc = load(scenario);
+  const Plant plant(std::get<typename Plant::Params>(sc.plant));
+  using Integrator = solvers::Rk4<Plant>;
+  std::int64_t steps = 0;
+  for (auto _ : state) {
+    ecu::EvFollower follower;
+    hil::Runner<Plant, Integrator, ecu::EvFollower> runner(plant, 1e-3, sc.solver.steps, 100, {0, 1, 2},
+                                                           sc.solver.steps, &follower);
+    runner.run();
+    steps += runner.step_index();
+    benchmark::DoNotOptimize(runner.state());
+  }
+  set_step_counters(state, static_cast<double>(steps));
+}
+
+}  // namespace
+
+void BM_EvRun_mbev(benchmark::State& state) { BM_EvRun<plant::BevPlant>(state, "ev_sort1.toml"); }
+void BM_EvRun_evpm(benchmark::State& state) { BM_EvRun<plant::EvPmPlant>(state, "evpm_sort1.toml"); }
+void BM_EvRun_evam(benchmark::State& state) { BM_EvRun<plant::EvAmPlant>(state, "evam_sort1.toml"); }
+BENCHMARK(BM_EvRun_mbev)->Name("BM_EvRun_sort1/mbev")->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_EvRun_evpm)->Name("BM_EvRun_sort1/evpm_bat")->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_EvRun_evam)->Name("BM_EvRun_sort1/evam_bat")->Unit(benchmark::kMillisecond);

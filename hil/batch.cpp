@@ -21,6 +21,7 @@ std::string fault_text(unsigned fault) {
   add(plant::kFaultCellCurrent, "cell current reached cell_current_max_A");
   add(plant::kFaultPowerInfeasible, "the drive asked for more power than the battery can give");
   add(plant::kFaultNonFinite, "non-finite state (NaN or Inf)");
+  add(plant::kFaultDriveSolve, "the drive's operating point did not converge");
   return s;
 }
 

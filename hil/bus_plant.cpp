@@ -237,7 +237,8 @@ class BusPlant final : public ExternalDriver {
 }  // namespace
 
 bool can_run_on_bus(const Scenario& sc, std::string& why) {
-  if (!std::holds_alternative<plant::PsdParams>(sc.plant) && !std::holds_alternative<plant::BevParams>(sc.plant)) {
+  // the ECU's messages decide the bus family: every EV kind uses the follower's, the hybrid its own
+  if (!std::holds_alternative<ecu::PsdEcuParams>(sc.ecu) && !std::holds_alternative<ecu::EvFollowerParams>(sc.ecu)) {
     why = sc.name + ": its vehicle (" + sc.vehicle_path +
           ") has no bus messages (the EV and the power-split hybrid talk to an ECU; the rigs do not)";
     return false;
@@ -253,7 +254,7 @@ bool can_run_on_bus(const Scenario& sc, std::string& why) {
 std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::can::Transport& bus, const BusPlantOptions& opt,
                                                std::string& error) {
   if (!can_run_on_bus(sc, error)) return nullptr;
-  if (std::holds_alternative<plant::PsdParams>(sc.plant)) {
+  if (std::holds_alternative<ecu::PsdEcuParams>(sc.ecu)) {
     using S = msgs::PsdSensors;
     return std::make_unique<BusPlant<S, CanWire<S>>>(sc, opt, bus, opt.log_interface);
   }
@@ -264,7 +265,7 @@ std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::can::Tran
 std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::lcm::LcmBus& bus, const BusPlantOptions& opt,
                                                std::string& error) {
   if (!can_run_on_bus(sc, error)) return nullptr;
-  if (std::holds_alternative<plant::PsdParams>(sc.plant)) {
+  if (std::holds_alternative<ecu::PsdEcuParams>(sc.ecu)) {
     using S = msgs::PsdSensors;
     return std::make_unique<BusPlant<S, LcmWire<S>>>(sc, opt, bus, opt.lcm_prefix);
   }

@@ -16,6 +16,7 @@
 #include "plant/battery_rig.hpp"
 #include "plant/bev_plant.hpp"
 #include "plant/drive_rigs.hpp"
+#include "plant/ev_machine_plant.hpp"
 #include "plant/psd_plant.hpp"
 
 namespace ehpt::hil {
@@ -60,7 +61,9 @@ struct Scenario {
   std::string description;
   std::string vehicle_path;
   std::string cycle_path;   // empty for rigs
-  std::variant<plant::BevParams, plant::DriveRigParams, plant::PsdParams, plant::BatteryRigParams> plant;
+  std::variant<plant::BevParams, plant::DriveRigParams, plant::PsdParams, plant::BatteryRigParams, plant::EvPmParams,
+               plant::EvAmParams>
+      plant;
   // the built-in ECU of vehicles that have one (the EV's follower, MBecu1/1soc/2)
   std::variant<std::monostate, ecu::EvFollowerParams, ecu::PsdEcuParams> ecu;
   EcuTiming ecu_timing;

@@ -37,6 +37,39 @@ plant::MapDriveParams read_drive(Reader r, Context& ctx) {
   return p;
 }
 
+plant::PmDriveParams read_pm_drive(Reader r) {
+  plant::PmDriveParams p;
+  p.pole_pairs = r.small_integer("pole_pairs", p.pole_pairs, 1, 100);
+  p.psi_pm_Wb = r.required_number("psi_pm_Wb");
+  p.Ld_H = r.required_number("Ld_H");
+  p.Lq_H = r.required_number("Lq_H");
+  p.Rs_Ohm = r.required_number("Rs_Ohm");
+  p.U_max_rms_V = r.required_number("U_max_rms_V");
+  p.I_lim_rms_A = r.required_number("I_lim_rms_A");
+  p.k_inv_W_per_A = r.number("k_inv_W_per_A", p.k_inv_W_per_A);
+  p.inertia_kgm2 = r.required_number("inertia_kgm2");
+  p.speed_max_rad_s = r.required_number("speed_max_rad_s");
+  r.finish();
+  return p;
+}
+
+plant::AmDriveParams read_am_drive(Reader r) {
+  plant::AmDriveParams p;
+  p.pole_pairs = r.small_integer("pole_pairs", p.pole_pairs, 1, 100);
+  p.R1_Ohm = r.required_number("R1_Ohm");
+  p.R2_Ohm = r.required_number("R2_Ohm");
+  p.L1_H = r.required_number("L1_H");
+  p.L2_H = r.required_number("L2_H");
+  p.Lm_H = r.required_number("Lm_H");
+  p.inertia_kgm2 = r.required_number("inertia_kgm2");
+  p.U_base_rms_V = r.required_number("U_base_rms_V");
+  p.w_e_base_rad_s = r.required_number("w_e_base_rad_s");
+  p.I_max_rms_A = r.required_number("I_max_rms_A");
+  p.k_inv_W_per_A = r.number("k_inv_W_per_A", p.k_inv_W_per_A);
+  r.finish();
+  return p;
+}
+
 plant::BatteryRcParams read_battery(Reader r) {
   plant::BatteryRcParams p;
   p.cell_capacity_Ah = r.number("cell_capacity_Ah", p.cell_capacity_Ah);

@@ -9,6 +9,7 @@
 #include "plant/battery_rig.hpp"
 #include "plant/bev_plant.hpp"
 #include "plant/drive_rigs.hpp"
+#include "plant/ev_machine_plant.hpp"
 #include "plant/psd_plant.hpp"
 
 namespace ehpt::hil {
@@ -17,7 +18,8 @@ namespace {
 
 using kinds::VehicleKind;
 
-const VehicleKind* const kKinds[] = {&kinds::kBev, &kinds::kPsd, &kinds::kDriveRig, &kinds::kBatteryRig};
+const VehicleKind* const kKinds[] = {&kinds::kBev, &kinds::kPsd, &kinds::kDriveRig, &kinds::kBatteryRig,
+                                     &kinds::kEvPm, &kinds::kEvAm};
 
 const VehicleKind& kind_of(const Scenario& sc) {
   struct Pick {
@@ -25,6 +27,8 @@ const VehicleKind& kind_of(const Scenario& sc) {
     const VehicleKind& operator()(const plant::PsdParams&) const { return kinds::kPsd; }
     const VehicleKind& operator()(const plant::DriveRigParams&) const { return kinds::kDriveRig; }
     const VehicleKind& operator()(const plant::BatteryRigParams&) const { return kinds::kBatteryRig; }
+    const VehicleKind& operator()(const plant::EvPmParams&) const { return kinds::kEvPm; }
+    const VehicleKind& operator()(const plant::EvAmParams&) const { return kinds::kEvAm; }
   };
   return std::visit(Pick{}, sc.plant);
 }

@@ -72,6 +72,7 @@ class BevPlant {
   struct Modes {
     Motion motion = Motion::kStuck;
   };
+  using Params = BevParams;
   using Inputs = msgs::EvCommand;  // held over each ECU period
   using Sensors = msgs::EvSensors;
 

@@ -38,6 +38,7 @@ enum Fault : unsigned {
   kFaultCellCurrent = 1u << 1,      // |i| / np >= cell_current_max_A
   kFaultPowerInfeasible = 1u << 2,  // constant-power load beyond the pack's maximum power
   kFaultNonFinite = 1u << 3,        // NaN or Inf in the state
+  kFaultDriveSolve = 1u << 4,       // a machine drive's algebraic solve did not converge (§9.1)
 };
 
 // Energy audit over a run, built once at the end (may allocate). The plant states the

@@ -434,7 +434,7 @@ int parse_bus_args(const std::vector<std::string>& args, bool plant, const char*
 // The ids a side of the contract accepts, by vehicle family.
 std::span<const std::uint32_t> rx_ids(const ehpt::hil::Scenario& sc, bool plant) {
   namespace can = ehpt::io::can;
-  const bool psd = std::holds_alternative<ehpt::plant::PsdParams>(sc.plant);
+  const bool psd = std::holds_alternative<ehpt::ecu::PsdEcuParams>(sc.ecu);
   if (plant) return psd ? std::span<const std::uint32_t>(can::kPsdCommandIds) : std::span<const std::uint32_t>(can::kEvCommandIds);
   return psd ? std::span<const std::uint32_t>(can::kPsdSensorIds) : std::span<const std::uint32_t>(can::kEvSensorIds);
 }

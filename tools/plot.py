@@ -7,7 +7,8 @@ Figures are written into OUT (default DIR); messages name them as if in NAME (de
 OUT): ehpt draws into a private folder and moves the figures into place itself.
 DIR must hold timeseries.csv (header of column names, then numeric rows) and
 usually summary.json.  Vehicle runs (column speed_m_s etc.) give speed, torque,
-power, soc and locked figures; drive-rig runs (TestMBOneFlange/TestTwoFlange,
+power, soc and locked figures, and the machine's currents and voltage for the
+machine-drive EVs (EvPm_bat, EvAm_bat); drive-rig runs (TestMBOneFlange/TestTwoFlange,
 column tauElectrical_Nm etc.) give torque, power and efficiency figures.
 A figure whose columns are absent from the CSV is skipped silently.
 """
@@ -212,6 +213,36 @@ class Plotter:
                 ax2.set_ylabel("speed [km/h]")
             self.save(fig, "locked.png")
 
+    # ---------------------------------------------------------------- machine drives
+    def machine(self):
+        """EvPm_bat / EvAm_bat (P15 Fig. 19): the machine's electrical picture."""
+        c, t = self.c, self.t
+        if self.has("id_A", "iq_A"):  # PMDrive: dq currents, voltage and its set value
+            volt = "voltage_peak_V" in c
+            fig, axes = self.figure(2 if volt else 1, "PM machine: dq currents and voltage")
+            axes[0].plot(t, c["id_A"], label="Id")
+            axes[0].plot(t, c["iq_A"], label="Iq")
+            axes[0].set_ylabel("current, peak [A]")
+            if volt:
+                axes[1].plot(t, c["voltage_peak_V"], color="tab:purple", label="|V| (peak phase)")
+                if "weakening" in c:
+                    w = np.where(c["weakening"] > 0.5, c["voltage_peak_V"], np.nan)
+                    axes[1].plot(t, w, color="tab:red", lw=3, alpha=0.5, label="flux weakening")
+                axes[1].set_ylabel("voltage [V]")
+            self.save(fig, "machine.png")
+        elif self.has("i1_rms_A", "slip_rad_s"):  # AMDrive: stator current, slip, voltage
+            fig, axes = self.figure(3, "induction machine: current, slip and voltage")
+            axes[0].plot(t, c["i1_rms_A"], label="stator current |I1| (rms)")
+            axes[0].set_ylabel("current [A]")
+            axes[1].plot(t, c["slip_rad_s"], color="tab:orange", label="slip frequency dWe")
+            axes[1].set_ylabel("slip [rad/s]")
+            if "u1_rms_V" in c:
+                axes[2].plot(t, c["u1_rms_V"], color="tab:purple", label="terminal |U1| (rms)")
+            if "emf_rms_V" in c:
+                axes[2].plot(t, c["emf_rms_V"], "--", color="tab:gray", label="E (rms)")
+            axes[2].set_ylabel("voltage [V]")
+            self.save(fig, "machine.png")
+
     # ---------------------------------------------------------------- hybrid runs
     def hybrid(self):
         """Power-split hybrids (column iceW_rad_s), like the paper's Figs. 21 and 23."""
@@ -347,6 +378,7 @@ def main(argv):
         p.rig()
     else:
         p.vehicle()
+        p.machine()
         if "iceW_rad_s" in cols:
             p.hybrid()
     if p.written == 0 and not quiet:

@@ -26,6 +26,7 @@ struct VehicleKind {
 };
 
 extern const VehicleKind kBev, kPsd, kDriveRig, kBatteryRig;
+extern const VehicleKind kEvPm, kEvAm;
 
 // One kind: its plant (and ECU) from the scenario, with the scenario's solver.
 template <class Plant, class Controller = NoController>

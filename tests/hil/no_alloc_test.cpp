@@ -41,7 +41,8 @@ TEST(NoAllocation, BevWithBothSolversAndItsEcu) {
 
 // Through the facade the CLI uses: after make_simulation(), run() allocates nothing.
 TEST(NoAllocation, SimulationFacade) {
-  for (const char* scenario : {"scenarios/ev_nedc.toml", "scenarios/psecu2_nedc.toml"}) {
+  for (const char* scenario : {"scenarios/ev_nedc.toml", "scenarios/psecu2_nedc.toml", "scenarios/evpm_sort1.toml",
+                               "scenarios/evpm_nedc.toml", "scenarios/evam_sort1.toml", "scenarios/evam_nedc.toml"}) {
     const Scenario sc = test::load(test::source_path(scenario), {"solver.duration_s=200", "vehicle.ecu.latency_s=0.005"});
     const auto sim = make_simulation(sc, SimulationOptions{{}, 200000});
     const std::size_t before = test::allocation_count();
