@@ -17,6 +17,7 @@
 #include "plant/bev_plant.hpp"
 #include "plant/drive_rigs.hpp"
 #include "plant/ev_machine_plant.hpp"
+#include "plant/machine_test_rigs.hpp"
 #include "plant/psd_plant.hpp"
 
 namespace ehpt::hil {
@@ -62,7 +63,7 @@ struct Scenario {
   std::string vehicle_path;
   std::string cycle_path;   // empty for rigs
   std::variant<plant::BevParams, plant::DriveRigParams, plant::PsdParams, plant::BatteryRigParams, plant::EvPmParams,
-               plant::EvAmParams>
+               plant::EvAmParams, plant::PmDriveTestParams, plant::AmDriveTestParams>
       plant;
   // the built-in ECU of vehicles that have one (the EV's follower, MBecu1/1soc/2)
   std::variant<std::monostate, ecu::EvFollowerParams, ecu::PsdEcuParams> ecu;

@@ -10,6 +10,7 @@
 #include "plant/bev_plant.hpp"
 #include "plant/drive_rigs.hpp"
 #include "plant/ev_machine_plant.hpp"
+#include "plant/machine_test_rigs.hpp"
 #include "plant/psd_plant.hpp"
 
 namespace ehpt::hil {
@@ -19,7 +20,7 @@ namespace {
 using kinds::VehicleKind;
 
 const VehicleKind* const kKinds[] = {&kinds::kBev, &kinds::kPsd, &kinds::kDriveRig, &kinds::kBatteryRig,
-                                     &kinds::kEvPm, &kinds::kEvAm};
+                                     &kinds::kEvPm, &kinds::kEvAm, &kinds::kPmDriveTest, &kinds::kAmDriveTest};
 
 const VehicleKind& kind_of(const Scenario& sc) {
   struct Pick {
@@ -29,6 +30,8 @@ const VehicleKind& kind_of(const Scenario& sc) {
     const VehicleKind& operator()(const plant::BatteryRigParams&) const { return kinds::kBatteryRig; }
     const VehicleKind& operator()(const plant::EvPmParams&) const { return kinds::kEvPm; }
     const VehicleKind& operator()(const plant::EvAmParams&) const { return kinds::kEvAm; }
+    const VehicleKind& operator()(const plant::PmDriveTestParams&) const { return kinds::kPmDriveTest; }
+    const VehicleKind& operator()(const plant::AmDriveTestParams&) const { return kinds::kAmDriveTest; }
   };
   return std::visit(Pick{}, sc.plant);
 }

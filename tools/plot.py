@@ -9,7 +9,9 @@ DIR must hold timeseries.csv (header of column names, then numeric rows) and
 usually summary.json.  Vehicle runs (column speed_m_s etc.) give speed, torque,
 power, soc and locked figures, and the machine's currents and voltage for the
 machine-drive EVs (EvPm_bat, EvAm_bat); drive-rig runs (TestMBOneFlange/TestTwoFlange,
-column tauElectrical_Nm etc.) give torque, power and efficiency figures.
+column tauElectrical_Nm etc.) give torque, power and efficiency figures; the
+detailed-machine rigs (TestPMDrive/TestAMDrive, column det_v_a_V) give the phase
+voltage against the quasi-static envelope, the torques, and a zoom on a few periods.
 A figure whose columns are absent from the CSV is skipped silently.
 """
 import csv
@@ -344,6 +346,68 @@ class Plotter:
             self.save(fig, "efficiency.png")
 
 
+    # ---------------------------------------------------------------- detailed references
+    def detailed(self):
+        """TestPMDrive / TestAMDrive (column det_v_a_V): the time-domain machine's phase
+        voltage against the quasi-static drive's peak (sqrt 2 x rms) envelope, and the two
+        torques; then a few electrical periods up close."""
+        c, t = self.c, self.t
+        qs_rms = self.first("qs_v_rms_V", "qs_u1_rms_V")
+        fig, axes = self.figure(2, "detailed machine vs quasi-static drive")
+        axes[0].plot(t, c["det_v_a_V"], color="tab:blue", lw=0.3, label="detailed v_a")
+        if qs_rms:
+            env = np.sqrt(2.0) * c[qs_rms]
+            axes[0].plot(t, env, color="tab:orange", label=f"quasi-static ±√2 × {qs_rms}")
+            axes[0].plot(t, -env, color="tab:orange")
+        if "v_lim_peak_V" in c:
+            axes[0].plot(t, c["v_lim_peak_V"], "--", color="tab:red", label="U_lim (peak)")
+        if "full_flux_v_peak_V" in c:
+            axes[0].plot(t, c["full_flux_v_peak_V"], ":", color="tab:purple",
+                         label="full flux: MTPA currents, no weakening (peak)")
+        axes[0].set_ylabel("phase voltage [V]")
+        if "torque_ref_Nm" in c:
+            axes[1].plot(t, c["torque_ref_Nm"], "--", color="tab:gray", label="request")
+        if "qs_torque_Nm" in c:
+            axes[1].plot(t, c["qs_torque_Nm"], color="tab:orange", lw=3, alpha=0.6, label="quasi-static")
+        if "det_torque_Nm" in c:
+            axes[1].plot(t, c["det_torque_Nm"], color="tab:blue", lw=0.8, label="detailed")
+        axes[1].set_ylabel("torque [N m]")
+        # the induction machine's start from zero flux swings far beyond the drive's range:
+        # keep the drive's range in view (the swing is clipped)
+        qs = [c[n] for n in ("qs_torque_Nm", "torque_ref_Nm") if n in c]
+        if qs:
+            lo, hi = min(0.0, float(np.nanmin(qs))), max(0.0, float(np.nanmax(qs)))
+            axes[1].set_ylim(lo - 0.2 * (hi - lo + 1.0), hi + 0.2 * (hi - lo + 1.0))
+        self.save(fig, "detailed.png")
+        # three 40 ms windows, ending at 20 %, 60 % and 100 % of the run
+        if len(t) < 2:
+            return
+        fig, axes = plt.subplots(1, 3, figsize=(12, 4), dpi=100, squeeze=False)
+        fig.suptitle(f"{self.scenario}: a few electrical periods" if self.scenario else "a few electrical periods")
+        for ax, frac in zip(axes[0], (0.2, 0.6, 1.0)):
+            end = t[0] + frac * (t[-1] - t[0])
+            m = (t > end - 0.04) & (t <= end)
+            ax.plot(t[m], c["det_v_a_V"][m], ".-", color="tab:blue", ms=3, label="detailed v_a")
+            if qs_rms:
+                env = np.sqrt(2.0) * c[qs_rms][m]
+                ax.plot(t[m], env, color="tab:orange", label="±√2 × QS rms")
+                ax.plot(t[m], -env, color="tab:orange")
+            if "det_i_a_A" in c:  # the induction rig: its phase current on a twin axis
+                ax2 = ax.twinx()
+                ax2.plot(t[m], c["det_i_a_A"][m], color="tab:green", lw=0.8, label="detailed i_a")
+                if "qs_i1_rms_A" in c:
+                    i1 = np.sqrt(2.0) * c["qs_i1_rms_A"][m]
+                    ax2.plot(t[m], i1, "--", color="tab:green", label="±√2 × QS I1 rms")
+                    ax2.plot(t[m], -i1, "--", color="tab:green")
+                ax2.set_ylabel("current [A]")
+                ax2.legend(loc="lower right", fontsize="x-small")
+            ax.set_xlabel(self.tlabel)
+            ax.set_ylabel("voltage [V]")
+            ax.grid(True, alpha=0.4)
+            ax.legend(loc="upper right", fontsize="x-small")
+        self.save(fig, "detailed_zoom.png")
+
+
 USAGE = "usage: /usr/bin/python3 tools/plot.py DIR [--out-dir OUT] [--as NAME] [--quiet]"
 
 
@@ -374,7 +438,9 @@ def main(argv):
     cols = load_csv(os.path.join(src, "timeseries.csv"))
     scenario = load_summary(os.path.join(src, "summary.json")).get("scenario")
     p = Plotter(out_dir, cols, str(scenario) if scenario else "", quiet, shown)
-    if RIG_COLUMNS & cols.keys():
+    if "det_v_a_V" in cols:  # TestPMDrive / TestAMDrive
+        p.detailed()
+    elif RIG_COLUMNS & cols.keys():
         p.rig()
     else:
         p.vehicle()

@@ -27,6 +27,7 @@ struct VehicleKind {
 
 extern const VehicleKind kBev, kPsd, kDriveRig, kBatteryRig;
 extern const VehicleKind kEvPm, kEvAm;
+extern const VehicleKind kPmDriveTest, kAmDriveTest;  // hil/kinds/machine_tests.cpp
 
 // One kind: its plant (and ECU) from the scenario, with the scenario's solver.
 template <class Plant, class Controller = NoController>
