@@ -246,23 +246,7 @@ void BevPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs&
 }
 
 EnergyAudit BevPlant::audit(const State& x0, const State& x) const {
-  const auto delta = [&](int i) { return x[i] - x0[i]; };
-  const double stored_out_J =
-      battery_.stored_energy_J(x0[kEmf], x0[kVrc]) - battery_.stored_energy_J(x[kEmf], x[kVrc]);
-  const double kinetic_J = 0.5 * mass_eff_kg_ * (x[kSpeed] * x[kSpeed] - x0[kSpeed] * x0[kSpeed]);
-  const double potential_J = p_.body.mass_kg * kGravity_m_s2 * delta(kAltitude);
-  EnergyAudit a;
-  a.sources_J = stored_out_J;
-  a.scale_J = std::abs(stored_out_J);
-  a.battery_out_J = delta(kBatteryOutJ);
-  a.battery_loss_J = delta(kBatteryLossJ);
-  a.residual_J = stored_out_J - (delta(kRoadJ) + delta(kDriveLossJ) + delta(kBatteryLossJ) + delta(kBrakeJ) +
-                                 kinetic_J + potential_J);
-  a.terms = {{"battery_stored_out_J", stored_out_J},   {"battery_terminal_out_J", delta(kBatteryOutJ)},
-             {"road_load_work_J", delta(kRoadJ)},       {"drive_losses_J", delta(kDriveLossJ)},
-             {"battery_losses_J", delta(kBatteryLossJ)}, {"brake_dissipation_J", delta(kBrakeJ)},
-             {"kinetic_energy_change_J", kinetic_J},     {"potential_energy_change_J", potential_J}};
-  return a;
+  return ev_energy_audit(battery_, mass_eff_kg_, p_.body.mass_kg, x0.data(), x.data());
 }
 
 }  // namespace ehpt::plant

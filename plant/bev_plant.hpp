@@ -36,6 +36,7 @@
 
 #include "msgs/ev.hpp"
 #include "plant/battery_rc.hpp"
+#include "plant/ev_state.hpp"
 #include "plant/map_drive.hpp"
 #include "plant/prop_driver.hpp"
 #include "plant/road_load.hpp"
@@ -55,18 +56,9 @@ struct BevParams {
 
 void validate(const BevParams& p, Problems& problems);
 
-class BevPlant {
+class BevPlant : public EvStateLayout {
  public:
-  // the state, composed: [v | VehicleBody | BatteryRc | energy integrals]
-  static constexpr int kSpeed = 0;
-  static constexpr int kBodyAt = kSpeed + 1;
-  static constexpr int kBatteryAt = kBodyAt + VehicleBody::kNumStates;
-  static constexpr int kIntegralsAt = kBatteryAt + BatteryRc::kNumStates;
-  static constexpr int kNumStates = kIntegralsAt + 3;
-  static constexpr int kDistance = kBodyAt + VehicleBody::kDistance, kAltitude = kBodyAt + VehicleBody::kAltitude;
-  static constexpr int kRoadJ = kBodyAt + VehicleBody::kRoadJ, kBrakeJ = kBodyAt + VehicleBody::kBrakeJ;
-  static constexpr int kEmf = kBatteryAt + BatteryRc::kEmf, kVrc = kBatteryAt + BatteryRc::kVrc;
-  static constexpr int kBatteryOutJ = kIntegralsAt, kDriveLossJ = kIntegralsAt + 1, kBatteryLossJ = kIntegralsAt + 2;
+  // the state: EvStateLayout (ev_state.hpp), [v | VehicleBody | BatteryRc | energy integrals]
   static constexpr int kNumCrossings = 1;
   using State = Eigen::Matrix<double, kNumStates, 1>;
   struct Modes {

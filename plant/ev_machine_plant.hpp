@@ -18,10 +18,7 @@
 //   body:     (m + J (G/r)^2) dv/dt = Te G/r - F_roll - F_v(v) - m g sin(alpha) - F_brake
 //   stuck:    dv/dt = 0 while |Te G/r - m g sin(alpha)| <= F_roll + F_brake   (locked, §7.2)
 //
-// State (one flat vector): v (m/s); VehicleBody's s, h, road work, brake work; the battery's
-// E and v_rc; energy integrals (J): battery terminal energy out, drive losses, battery losses.
-// Energy audit: stored-energy decrease = road work + drive losses + battery losses + brake
-//                                        + change of kinetic energy + m g (h - h0).
+// State and energy audit: those of the map-based EV (ev_state.hpp).
 // The drive's electrical state is algebraic (no states, §10.7 recommendation with the
 // algebraic current limit), solved at each evaluation from the same inputs, so the plant's
 // functions stay pure and a trajectory does not depend on which outputs were recorded.
@@ -39,6 +36,7 @@
 #include "msgs/ev.hpp"
 #include "plant/am_drive.hpp"
 #include "plant/battery_rc.hpp"
+#include "plant/ev_state.hpp"
 #include "plant/pm_drive.hpp"
 #include "plant/prop_driver.hpp"
 #include "plant/road_load.hpp"
@@ -124,17 +122,9 @@ void validate(const EvMachineParams<Drive>& p, Problems& problems) {
 }
 
 template <class Drive>
-class EvMachinePlant {
+class EvMachinePlant : public EvStateLayout {
  public:
-  static constexpr int kSpeed = 0;
-  static constexpr int kBodyAt = kSpeed + 1;
-  static constexpr int kBatteryAt = kBodyAt + VehicleBody::kNumStates;
-  static constexpr int kIntegralsAt = kBatteryAt + BatteryRc::kNumStates;
-  static constexpr int kNumStates = kIntegralsAt + 3;
-  static constexpr int kDistance = kBodyAt + VehicleBody::kDistance, kAltitude = kBodyAt + VehicleBody::kAltitude;
-  static constexpr int kRoadJ = kBodyAt + VehicleBody::kRoadJ, kBrakeJ = kBodyAt + VehicleBody::kBrakeJ;
-  static constexpr int kEmf = kBatteryAt + BatteryRc::kEmf, kVrc = kBatteryAt + BatteryRc::kVrc;
-  static constexpr int kBatteryOutJ = kIntegralsAt, kDriveLossJ = kIntegralsAt + 1, kBatteryLossJ = kIntegralsAt + 2;
+  // the state: EvStateLayout (ev_state.hpp), [v | VehicleBody | BatteryRc | energy integrals]
   static constexpr int kNumCrossings = 1;
   using State = Eigen::Matrix<double, kNumStates, 1>;
   using Params = EvMachineParams<Drive>;
@@ -211,23 +201,7 @@ class EvMachinePlant {
 
   // Energy audit between x0 and x (end of run; allocates).
   EnergyAudit audit(const State& x0, const State& x) const {
-    const auto delta = [&](int i) { return x[i] - x0[i]; };
-    const double stored_out_J =
-        battery_.stored_energy_J(x0[kEmf], x0[kVrc]) - battery_.stored_energy_J(x[kEmf], x[kVrc]);
-    const double kinetic_J = 0.5 * mass_eff_kg_ * (x[kSpeed] * x[kSpeed] - x0[kSpeed] * x0[kSpeed]);
-    const double potential_J = p_.body.mass_kg * kGravity_m_s2 * delta(kAltitude);
-    EnergyAudit a;
-    a.sources_J = stored_out_J;
-    a.scale_J = std::abs(stored_out_J);
-    a.battery_out_J = delta(kBatteryOutJ);
-    a.battery_loss_J = delta(kBatteryLossJ);
-    a.residual_J = stored_out_J - (delta(kRoadJ) + delta(kDriveLossJ) + delta(kBatteryLossJ) + delta(kBrakeJ) +
-                                   kinetic_J + potential_J);
-    a.terms = {{"battery_stored_out_J", stored_out_J},   {"battery_terminal_out_J", delta(kBatteryOutJ)},
-               {"road_load_work_J", delta(kRoadJ)},       {"drive_losses_J", delta(kDriveLossJ)},
-               {"battery_losses_J", delta(kBatteryLossJ)}, {"brake_dissipation_J", delta(kBrakeJ)},
-               {"kinetic_energy_change_J", kinetic_J},     {"potential_energy_change_J", potential_J}};
-    return a;
+    return ev_energy_audit(battery_, mass_eff_kg_, p_.body.mass_kg, x0.data(), x.data());
   }
 
   const Params& params() const { return p_; }

@@ -8,17 +8,6 @@ namespace ehpt::hil::kinds {
 
 namespace {
 
-// The EV's built-in ECU: the driver-follower; an optional [ecu] table sets its timing.
-void read_ev_ecu(Reader r, EcuTiming& timing, Context& ctx) {
-  const std::string kind = r.text("kind", "follower");
-  if (kind != "follower") {
-    ctx.error(ctx.where[r.field("kind")], r.field("kind"), "\"" + kind + "\"",
-              "must be \"follower\" (the built-in ECU of the EV; an external one joins over a bus)");
-  }
-  read_ecu_timing(r, timing);
-  r.finish();
-}
-
 plant::BevParams read_bev(Reader& root, const FileRef& cycle, bool periodic, Context& ctx) {
   plant::BevParams p;
   p.body = read_body(root.sub("vehicle"));
@@ -35,7 +24,7 @@ KindRead read_bev_kind(Reader& vr, const KindInput& in, Scenario& out, Problems&
                        Context& ctx) {
   need_cycle(in, ctx);
   plant::BevParams p = read_bev(vr, in.cycle, in.cycle_periodic, ctx);
-  read_ev_ecu(vr.sub("ecu"), out.ecu_timing, ctx);
+  read_follower_ecu(vr.sub("ecu"), out.ecu_timing, ctx);
   vr.finish();
   out.ecu = ecu::EvFollowerParams{};
   plant::validate(p, problems);

@@ -13,16 +13,6 @@ namespace ehpt::hil::kinds {
 
 namespace {
 
-void read_follower(Reader r, EcuTiming& timing, Context& ctx) {
-  const std::string kind = r.text("kind", "follower");
-  if (kind != "follower") {
-    ctx.error(ctx.where[r.field("kind")], r.field("kind"), "\"" + kind + "\"",
-              "must be \"follower\" (the built-in ECU of the EV; an external one joins over a bus)");
-  }
-  read_ecu_timing(r, timing);
-  r.finish();
-}
-
 template <class Drive, class ReadDrive>
 KindRead read_machine_ev(Reader& vr, const KindInput& in, Scenario& out, Problems& problems, Problems& warnings,
                          Context& ctx, ReadDrive read_machine) {
@@ -35,7 +25,7 @@ KindRead read_machine_ev(Reader& vr, const KindInput& in, Scenario& out, Problem
   p.driver = read_driver(vr.sub("driver"));
   p.brake = read_brake(vr.sub("brake"));
   if (!in.cycle.empty()) p.driver.cycle_m_s = load_cycle(in.cycle, "driver.cycle", in.cycle_periodic, ctx);
-  read_follower(vr.sub("ecu"), out.ecu_timing, ctx);
+  read_follower_ecu(vr.sub("ecu"), out.ecu_timing, ctx);
   vr.finish();
   out.ecu = ecu::EvFollowerParams{};
   plant::validate(p, problems);

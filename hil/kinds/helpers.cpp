@@ -10,6 +10,16 @@ void no_cycle(const KindInput& in, const char* what, Context& ctx) {
     ctx.error(in.cycle.where, "cycle", "\"" + in.cycle.written + "\"", std::string(what) + " has no driver: remove the cycle");
   }
 }
+void read_follower_ecu(Reader r, EcuTiming& timing, Context& ctx) {
+  const std::string kind = r.text("kind", "follower");
+  if (kind != "follower") {
+    ctx.error(ctx.where[r.field("kind")], r.field("kind"), "\"" + kind + "\"",
+              "must be \"follower\" (the built-in ECU of the EV; an external one joins over a bus)");
+  }
+  read_ecu_timing(r, timing);
+  r.finish();
+}
+
 std::optional<double> cycle_length(const plant::PropDriverParams& d) {
   if (d.cycle_m_s.empty()) return std::nullopt;
   return d.cycle_m_s.x().back();

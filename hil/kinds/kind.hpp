@@ -59,5 +59,7 @@ inline std::vector<SignalInfo> signals_of(const Plant& plant) {
 void need_cycle(const KindInput& in, Context& ctx);
 void no_cycle(const KindInput& in, const char* what, Context& ctx);
 std::optional<double> cycle_length(const plant::PropDriverParams& d);
+// The EVs' built-in ECU, the driver-follower: an optional [ecu] table with its timing.
+void read_follower_ecu(Reader r, EcuTiming& timing, Context& ctx);
 
 }  // namespace ehpt::hil::kinds

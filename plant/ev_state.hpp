@@ -1,0 +1,34 @@
+#pragma once
+// What the battery-electric vehicles share beyond their components: the map-based EV
+// (bev_plant.hpp) and the machine-drive EVs (ev_machine_plant.hpp) have one state layout,
+//   [v | VehicleBody (s, h, road work, brake work) | BatteryRc (E, v_rc) |
+//    battery terminal energy out, drive losses, battery losses]        (m/s, m, J, V)
+// and one energy balance over it:
+//   stored-energy decrease = road work + drive losses + battery losses + brake
+//                            + change of kinetic energy (vehicle + rotor) + m g (h - h0)
+
+#include "plant/battery_rc.hpp"
+#include "plant/signals.hpp"
+#include "plant/vehicle_body.hpp"
+
+namespace ehpt::plant {
+
+struct EvStateLayout {
+  // offsets composed from the components' sizes
+  static constexpr int kSpeed = 0;
+  static constexpr int kBodyAt = kSpeed + 1;
+  static constexpr int kBatteryAt = kBodyAt + VehicleBody::kNumStates;
+  static constexpr int kIntegralsAt = kBatteryAt + BatteryRc::kNumStates;
+  static constexpr int kNumStates = kIntegralsAt + 3;
+  static constexpr int kDistance = kBodyAt + VehicleBody::kDistance, kAltitude = kBodyAt + VehicleBody::kAltitude;
+  static constexpr int kRoadJ = kBodyAt + VehicleBody::kRoadJ, kBrakeJ = kBodyAt + VehicleBody::kBrakeJ;
+  static constexpr int kEmf = kBatteryAt + BatteryRc::kEmf, kVrc = kBatteryAt + BatteryRc::kVrc;
+  static constexpr int kBatteryOutJ = kIntegralsAt, kDriveLossJ = kIntegralsAt + 1, kBatteryLossJ = kIntegralsAt + 2;
+};
+
+// The balance above between the states x0 and x (kNumStates values each; end of run, allocates).
+// mass_eff_kg: vehicle + rotor reflected (kinetic energy); mass_kg: the vehicle (potential).
+EnergyAudit ev_energy_audit(const BatteryRc& battery, double mass_eff_kg, double mass_kg, const double* x0,
+                            const double* x);
+
+}  // namespace ehpt::plant
