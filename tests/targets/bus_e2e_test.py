@@ -175,6 +175,25 @@ class Lockstep(BusTest):
                 checked += 1
         self.assertGreater(checked, 1900)
 
+    def test_machine_drive_evs_over_socketcand_are_bit_identical(self):
+        """EvPm_bat and EvAm_bat take their torque reference through the EV's command frame:
+        plant and follower as two processes in lockstep over socketcand, Sort1 (150 s) ==
+        the in-process run through the codec, byte for byte."""
+        for scenario in ("evpm_sort1", "evam_sort1"):
+            ref = self.reference(scenario, [], scenario + "_ref")
+            port = free_port()
+            plant = self.plant(scenario, port, self.tmp / scenario, "--lockstep")
+            ecu = self.ecu(scenario, port)
+            rc, _, err = self.finish(plant)
+            self.assertEqual(rc, 0, err)
+            self.assertEqual(self.finish(ecu)[0], 0)
+            self.assertEqual((ref / "timeseries.csv").read_bytes(),
+                             (self.tmp / scenario / "timeseries.csv").read_bytes(), scenario)
+            summary = json.loads((self.tmp / scenario / "summary.json").read_text())
+            self.assertEqual(summary["bus"]["commands_applied"], 15001, scenario)
+            self.assertEqual(summary["bus"]["timeouts"], 0, scenario)
+            self.assertAlmostEqual(summary["distance_m"], 518.5, delta=1.0)
+
     def test_python_can_ev_ecu_over_socketcand(self):
         """python-can's socketcand interface drives the EV through the DBC signals: the car
         follows 60 s of NEDC, and the run equals the in-process follower through the codec."""
@@ -348,11 +367,11 @@ class Lcm(BusTest):
         return out
 
     def test_lockstep_over_udpm_is_bit_identical_to_the_plain_run(self):
-        """ehpt plant and ehpt ecu as two processes over LCM udpm, lockstep: the EV (60 s) and
-        the paper's PSecu2 (200 s of NEDC) equal the in-process runs byte for byte. (The CAN
+        """ehpt plant and ehpt ecu as two processes over LCM udpm, lockstep: the EV (60 s), the
+        paper's PSecu2 (200 s of NEDC) and EvPm_bat (Sort1) equal the in-process runs byte for byte. (The CAN
         run of the same scenario equals its own reference, the one through the CAN codec: CAN
         quantises, LCM does not; the two differ by the quantisation, checked small here.)"""
-        for scenario, seconds in (("ev_nedc", 60), ("psecu2_nedc", 200)):
+        for scenario, seconds in (("ev_nedc", 60), ("psecu2_nedc", 200), ("evpm_sort1", 150)):
             sets = ["solver.duration_s=%d" % seconds]
             ref = self.plain_reference(scenario, sets, scenario + "_ref")
             plant, ecu = self.lcm_run(scenario, scenario, sets, "--lockstep")

@@ -281,6 +281,36 @@ TEST_F(BadInput, EveryProblemIsListedAtOnce) {
   EXPECT_HAS(r.err, "3 problems; nothing was run.");
 }
 
+// Physically impossible machine data (issue 10), in the machine EVs' own vehicle files.
+TEST_F(BadInput, ImpossibleMachineDataIsNamedWithFileLineFieldAndValue) {
+  vehicle_ = slurp(ehpt::test::source_path("vehicles/evpm_bat.toml"));
+  replace(vehicle_, "pole_pairs = 2", "pole_pairs = 0");
+  replace(vehicle_, "psi_pm_Wb = 0.5055", "psi_pm_Wb = -0.5");
+  replace(vehicle_, "Ld_H = 2.0e-3", "Ld_H = 0.0");
+  const Result r = run();
+  EXPECT_HAS(r.err, file("vehicle.toml") + ":22: drive.pole_pairs = 0: must be a whole number in [1, 100]");
+  EXPECT_HAS(r.err, file("vehicle.toml") + ":23: drive.psi_pm_Wb = -0.5: must be a finite number > 0");
+  EXPECT_HAS(r.err, file("vehicle.toml") + ":24: drive.Ld_H = 0: must be a finite number > 0");
+}
+
+TEST_F(BadInput, ASetVoltageTheBatteryCannotSupplyIsNamed) {
+  vehicle_ = slurp(ehpt::test::source_path("vehicles/evpm_bat.toml"));
+  replace(vehicle_, "U_max_rms_V = 100.0", "U_max_rms_V = 200.0");
+  EXPECT_HAS(run().err, file("vehicle.toml") + ":27: drive.U_max_rms_V = 200: the DC bus cannot supply it: its peak (" );
+  vehicle_ = slurp(ehpt::test::source_path("vehicles/evam_bat.toml"));
+  replace(vehicle_, "U_base_rms_V = 100.0", "U_base_rms_V = 150.0");
+  EXPECT_HAS(run().err, file("vehicle.toml") + ":28: drive.U_base_rms_V = 150: the DC bus cannot supply it");
+}
+
+TEST_F(BadInput, ACurrentLimitBelowTheNoLoadCurrentIsNamed) {
+  vehicle_ = slurp(ehpt::test::source_path("vehicles/evpm_bat.toml"));
+  replace(vehicle_, "I_lim_rms_A = 100.0", "I_lim_rms_A = 50.0");
+  EXPECT_HAS(run().err, file("vehicle.toml") + ":28: drive.I_lim_rms_A = 50: is below the no-load current flux weakening needs at speed_max_rad_s");
+  vehicle_ = slurp(ehpt::test::source_path("vehicles/evam_bat.toml"));
+  replace(vehicle_, "I_max_rms_A = 250.0", "I_max_rms_A = 30.0");
+  EXPECT_HAS(run().err, file("vehicle.toml") + ":30: drive.I_max_rms_A = 30: must be above the no-load");
+}
+
 // The paper's PSecu2 vehicle with its maps copied next to it, one line replaced.
 class BadPsdInput : public ::testing::Test {
  protected:
