@@ -29,6 +29,7 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 #include <span>
 
 #include <Eigen/Core>
@@ -125,11 +126,14 @@ template <class Drive>
 class EvMachinePlant : public EvStateLayout {
  public:
   // the state: EvStateLayout (ev_state.hpp), [v | VehicleBody | BatteryRc | energy integrals]
-  static constexpr int kNumCrossings = 1;
+  // crossing 0: stick/slip (as the map EV); then the drive's own (PMDrive: MTPA <-> flux
+  // weakening, located so that no RK4 step straddles the kink)
+  static constexpr int kNumCrossings = 1 + Drive::kNumCrossings;
   using State = Eigen::Matrix<double, kNumStates, 1>;
   using Params = EvMachineParams<Drive>;
   struct Modes {
     Motion motion = Motion::kStuck;
+    typename Drive::Mode drive{};
   };
   using Inputs = msgs::EvCommand;
   using Sensors = msgs::EvSensors;
@@ -155,7 +159,9 @@ class EvMachinePlant : public EvStateLayout {
     x[kEmf] = battery_.constants().emf_initial_V;
     return x;
   }
-  Modes initial_modes(const State& x0) const { return Modes{x0[kSpeed] > 0.0 ? Motion::kForward : Motion::kStuck}; }
+  // the drive's mode starts at its default; if the first command says otherwise, its
+  // crossing is negative at the first step's start and fires there
+  Modes initial_modes(const State& x0) const { return Modes{x0[kSpeed] > 0.0 ? Motion::kForward : Motion::kStuck, {}}; }
 
   // Run phase: pure functions, no allocation.
   void derivatives(double, const State& x, const Modes& m, const Inputs& u, State& dx) const {
@@ -168,8 +174,15 @@ class EvMachinePlant : public EvStateLayout {
       const AtRest r = at_rest(x, u);
       z[0] = VehicleBody::stuck_crossing(r.applied_N, r.breakaway_N);
     }
+    if constexpr (Drive::kNumCrossings > 0) {
+      drive_.crossings(m.drive, u.driveTauRef_Nm, x[kSpeed] * g_over_r_, x[kEmf] - x[kVrc], z + 1);
+    }
   }
-  void on_crossing(int, double, State& x, Modes& m, const Inputs& u) const {
+  void on_crossing(int index, double, State& x, Modes& m, const Inputs& u) const {
+    if (index > 0) {
+      if constexpr (Drive::kNumCrossings > 0) drive_.on_crossing(index - 1, m.drive);
+      return;
+    }
     if (m.motion != Motion::kStuck) x[kSpeed] = 0.0;  // came to rest: exactly zero
     const AtRest r = at_rest(x, u);
     m.motion = motion_at_rest(r.applied_N, r.breakaway_N);
@@ -332,10 +345,32 @@ class PmMachine {
       {"overload", &Outputs::overload, "1 when holding the voltage alone needs more than the current limit"},
   }};
 
-  explicit PmMachine(const Params& p) : p_(p), torque_max_Nm_(pm_torque_at_current_limit_Nm(p)) {}
+  explicit PmMachine(const Params& p)
+      : p_(p),
+        torque_max_Nm_(pm_torque_at_current_limit_Nm(p)),
+        mtpa_at_limit_{pm_mtpa(p, torque_max_Nm_), pm_mtpa(p, -torque_max_Nm_)} {}
+  // The operating point; MTPA for T* is solved once per command (see mtpa_of).
   Point operate(double torque_ref_Nm, double speed_rad_s, double u_dc_V) const {
-    return pm_operating_point(p_, torque_ref_Nm, speed_rad_s, u_dc_V);
+    return pm_operating_point(p_, torque_ref_Nm, speed_rad_s, u_dc_V, mtpa_of(torque_ref_Nm));
   }
+
+  // MTPA <-> flux weakening as a located event (the "switch as an event"; the
+  // operating point itself is continuous there, MODELS.md §12, and picks its branch at every
+  // evaluation, so the event only keeps RK4 steps off the kink and marks the time). The
+  // switch is where the MTPA currents of the torque the drive gives reach the voltage: T*,
+  // or MTPA at the current limit when T* needs more current.
+  static constexpr int kNumCrossings = 1;
+  struct Mode {
+    bool weakening = false;
+  };
+  void crossings(const Mode& m, double torque_ref_Nm, double speed_rad_s, double u_dc_V, double* z) const {
+    const PmCurrents& c = std::abs(torque_ref_Nm) > torque_max_Nm_ ? mtpa_at_limit_[torque_ref_Nm > 0.0 ? 0 : 1]
+                                                                   : mtpa_of(torque_ref_Nm);
+    const double excess_V2 = pm_voltage_excess_V2(p_, c, speed_rad_s, u_dc_V);
+    z[0] = m.weakening ? excess_V2 : -excess_V2;
+  }
+  void on_crossing(int, Mode& m) const { m.weakening = !m.weakening; }
+
   double inertia_kgm2() const { return p_.inertia_kgm2; }
   // For the ECU (driveTauLim): the MTPA torque at the current limit; flux weakening lowers
   // what is reachable above base speed, which this bound does not follow.
@@ -359,8 +394,23 @@ class PmMachine {
   static void validate_with_battery(const Params& p, const BatteryRcParams& b, Problems& problems);
 
  private:
+  // MTPA of T*, remembered for the last T* (the command is held over an ECU period, so all
+  // RK4 stages and crossings of the period share one Newton solve). pm_mtpa is a pure
+  // function of T*, so the memo returns exactly what a fresh solve would: a run does not
+  // depend on the order of calls. Not for two threads at once (a plant belongs to one run).
+  const PmCurrents& mtpa_of(double torque_ref_Nm) const {
+    if (!(torque_ref_Nm == memo_torque_Nm_)) {  // NaN never matches: solved (and flagged) each time
+      memo_ = pm_mtpa(p_, torque_ref_Nm);
+      memo_torque_Nm_ = torque_ref_Nm;
+    }
+    return memo_;
+  }
+
   Params p_;
   double torque_max_Nm_;
+  PmCurrents mtpa_at_limit_[2];  // MTPA at the current limit, motoring and braking
+  mutable PmCurrents memo_;
+  mutable double memo_torque_Nm_ = std::numeric_limits<double>::quiet_NaN();
 };
 
 // AMDrive as the EV's drive (am_drive.hpp): TorqueToDW, slip limiter, current limit, QSAsma.
@@ -385,6 +435,8 @@ class AmMachine {
   }};
 
   explicit AmMachine(const Params& p) : p_(p) {}
+  static constexpr int kNumCrossings = 0;  // continuous (§12): no event
+  struct Mode {};
   // the U/f drive sets E from the frequency; the DC voltage only bounds it (validate)
   Point operate(double torque_ref_Nm, double speed_rad_s, double) const {
     return am_operating_point(p_, torque_ref_Nm, speed_rad_s);

@@ -139,8 +139,26 @@ double pm_voltage_limit_V(const PmDriveParams& p, double u_dc_V) {
   return std::min(std::max(u_dc_V, 0.0) / std::sqrt(3.0), std::sqrt(2.0) * p.U_max_rms_V);
 }
 
-PmOperatingPoint pm_operating_point(const PmDriveParams& p, double torque_ref_Nm, double speed_rad_s, double u_dc_V,
-                                    double warm_iq_A) {
+PmCurrents pm_mtpa(const PmDriveParams& p, double torque_Nm) {
+  PmOperatingPoint op;
+  PmCurrents c;
+  mtpa(p, torque_Nm, 0.0, c.id_A, c.iq_A, op);
+  c.converged = op.converged;
+  c.iterations = op.iterations;
+  return c;
+}
+
+double pm_voltage_excess_V2(const PmDriveParams& p, const PmCurrents& c, double speed_rad_s, double u_dc_V) {
+  double vd = 0.0, vq = 0.0;
+  voltages(p, p.pole_pairs * speed_rad_s, c.id_A, c.iq_A, vd, vq);
+  const double U = pm_voltage_limit_V(p, u_dc_V);
+  return vd * vd + vq * vq - U * U;
+}
+
+namespace {
+
+PmOperatingPoint operating_point(const PmDriveParams& p, double torque_ref_Nm, double speed_rad_s, double u_dc_V,
+                                 double warm_iq_A, const PmCurrents* mtpa_of_ref) {
   PmOperatingPoint op;
   const double we = p.pole_pairs * speed_rad_s;
   const double U = pm_voltage_limit_V(p, u_dc_V);
@@ -148,7 +166,14 @@ PmOperatingPoint pm_operating_point(const PmDriveParams& p, double torque_ref_Nm
   // The currents for torque t within the voltage: MTPA, or flux weakening when MTPA's |V|
   // is above U. False if t is beyond reach at this speed.
   const auto currents_for = [&](double t, double warm_iq, double& id, double& iq, bool& weakening) {
-    mtpa(p, t, warm_iq, id, iq, op);
+    if (mtpa_of_ref != nullptr && t == torque_ref_Nm) {  // the caller has it (the same solve)
+      id = mtpa_of_ref->id_A;
+      iq = mtpa_of_ref->iq_A;
+      op.converged = op.converged && mtpa_of_ref->converged;
+      op.iterations += mtpa_of_ref->iterations;
+    } else {
+      mtpa(p, t, warm_iq, id, iq, op);
+    }
     double vd = 0.0, vq = 0.0;
     voltages(p, we, id, iq, vd, vq);
     weakening = vd * vd + vq * vq > U * U;
@@ -247,6 +272,18 @@ PmOperatingPoint pm_operating_point(const PmDriveParams& p, double torque_ref_Nm
   const double i2 = id * id + iq * iq;
   op.p_dc_W = op.torque_Nm * speed_rad_s + 1.5 * p.Rs_Ohm * i2 + p.k_inv_W_per_A * std::sqrt(i2 / 2.0);
   return op;
+}
+
+}  // namespace
+
+PmOperatingPoint pm_operating_point(const PmDriveParams& p, double torque_ref_Nm, double speed_rad_s, double u_dc_V,
+                                    double warm_iq_A) {
+  return operating_point(p, torque_ref_Nm, speed_rad_s, u_dc_V, warm_iq_A, nullptr);
+}
+
+PmOperatingPoint pm_operating_point(const PmDriveParams& p, double torque_ref_Nm, double speed_rad_s, double u_dc_V,
+                                    const PmCurrents& mtpa_of_ref) {
+  return operating_point(p, torque_ref_Nm, speed_rad_s, u_dc_V, 0.0, &mtpa_of_ref);
 }
 
 }  // namespace ehpt::plant

@@ -73,8 +73,23 @@ double pm_torque_at_current_limit_Nm(const PmDriveParams& p);
 double pm_voltage_limit_V(const PmDriveParams& p, double u_dc_V);
 
 // Pure: the operating point for torque request T*, rotor speed wm and DC voltage. warm_iq_A:
-// the last step's MTPA Iq (a start for Newton; 0 if none).
+// a start for MTPA's Newton (0: its own, T* / (1.5 pp psi)); the result depends on it only
+// within the tolerance, so a caller that wants bit-identical runs passes none.
 PmOperatingPoint pm_operating_point(const PmDriveParams& p, double torque_ref_Nm, double speed_rad_s, double u_dc_V,
                                     double warm_iq_A = 0.0);
+
+// MTPA currents of a torque (no limits; they do not depend on the speed), and the same
+// operating point as above with them given: a vehicle holds T* over an ECU period and solves
+// MTPA once for all the evaluations of that period (bit for bit the same result).
+struct PmCurrents {
+  double id_A = 0.0, iq_A = 0.0;  // peak
+  bool converged = true;
+  int iterations = 0;
+};
+PmCurrents pm_mtpa(const PmDriveParams& p, double torque_Nm);
+PmOperatingPoint pm_operating_point(const PmDriveParams& p, double torque_ref_Nm, double speed_rad_s, double u_dc_V,
+                                    const PmCurrents& mtpa_of_ref);
+// |V|^2 - U_lim^2 at the currents c and this speed (peak V^2): > 0 where they need weakening.
+double pm_voltage_excess_V2(const PmDriveParams& p, const PmCurrents& c, double speed_rad_s, double u_dc_V);
 
 }  // namespace ehpt::plant

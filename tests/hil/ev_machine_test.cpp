@@ -9,7 +9,9 @@
 
 #include "hil/config.hpp"
 #include "hil/simulation.hpp"
+#include "ecu/ev_follower.hpp"
 #include "plant/ev_machine_plant.hpp"
+#include "solvers/event_stepper.hpp"
 #include "test_plants.hpp"
 
 namespace ehpt::hil {
@@ -144,6 +146,36 @@ TEST(EvPmBat, ADriveSolveThatDoesNotConvergeIsAFaultBitNotACrash) {
   EXPECT_EQ(s.fault & plant::kFaultDriveSolve, plant::kFaultDriveSolve);
   EXPECT_FALSE(plant::pm_operating_point(plant.params().drive, std::nan(""), 100.0, 400.0).converged);
   EXPECT_TRUE(plant::pm_operating_point(plant.params().drive, 100.0, 100.0, 400.0).converged);
+}
+
+TEST(EvPmBat, TheSwitchToFluxWeakeningIsALocatedEvent) {
+  // the mode follows the drive's branch at every grid point, and it switches by events
+  // located inside the steps (not at step ends), each where the MTPA voltage meets U_lim
+  const Scenario sc = test::load(test::source_path("scenarios/evpm_sort1.toml"));
+  using P = plant::EvPmPlant;
+  const P plant(std::get<plant::EvPmParams>(sc.plant));
+  solvers::Rk4<P> rk4(plant);
+  solvers::EventStepper<P, solvers::Rk4<P>> stepper(plant, rk4, 0.0, 1e-3);
+  P::State x = plant.initial_state();
+  P::Modes m = plant.initial_modes(x);
+  msgs::EvCommand command;
+  ecu::EvFollower follower;
+  int switches = 0, inside = 0;
+  for (std::int64_t n = 0; n < 150000; ++n) {
+    const bool before = m.drive.weakening;
+    const solvers::StepReport r = test::step_with_ecu(plant, stepper, follower, n, x, m, command);
+    if (m.drive.weakening != before) {
+      ++switches;
+      ASSERT_GT(r.events, 0) << n;
+      const double t_end = stepper.time_s(n + 1);
+      if (r.event_time_s > stepper.time_s(n) && r.event_time_s < t_end) ++inside;
+    }
+    P::Outputs y;
+    plant.outputs(stepper.time_s(n + 1), x, m, command, y);
+    ASSERT_EQ(y.weakening == 1.0, m.drive.weakening) << "t = " << stepper.time_s(n + 1);
+  }
+  EXPECT_GE(switches, 2);  // into flux weakening on the 40 km/h plateau, and out of it
+  EXPECT_GE(inside, 1);    // at least one located inside a step (speed-driven, not a new command)
 }
 
 TEST(EvPmBat, TheFollowerThroughTheCanCodecDrivesTheSameCar) {
