@@ -178,6 +178,27 @@ TEST(EvPmBat, TheSwitchToFluxWeakeningIsALocatedEvent) {
   EXPECT_GE(inside, 1);    // at least one located inside a step (speed-driven, not a new command)
 }
 
+TEST(EvPmBat, AccelerationIsTheClosedFormWithTheRotorReflected) {
+  // (m + J (G/r)^2) dv/dt = Te G/r - fc m g - rho S Cx v^2 / 2, at 10 m/s and 100 N m asked
+  const Scenario sc = test::load(test::source_path("scenarios/evpm_sort1.toml"));
+  const plant::EvPmParams& p = std::get<plant::EvPmParams>(sc.plant);
+  const plant::EvPmPlant plant(p);
+  auto x = plant.initial_state();
+  x[plant::EvPmPlant::kSpeed] = 10.0;
+  const plant::EvPmPlant::Modes m{plant::Motion::kForward, {}};
+  msgs::EvCommand u;
+  u.driveTauRef_Nm = 100.0;
+  plant::EvPmPlant::Outputs y;
+  plant.outputs(0.0, x, m, u, y);
+  const double g_over_r = 3.905 / 0.31, speed_rad_s = 10.0 * g_over_r;
+  const double te = plant::pm_operating_point(p.drive, 100.0, speed_rad_s, x[plant::EvPmPlant::kEmf]).torque_Nm;
+  EXPECT_NEAR(te, 100.0, 1e-9);  // below base speed: delivered as asked
+  const double road_N = 0.014 * 1300.0 * 9.80665 + 0.5 * 1.226 * 2.2 * 0.26 * 100.0;
+  const double expected = (te * g_over_r - road_N) / (1300.0 + 0.29 * g_over_r * g_over_r);
+  EXPECT_NEAR(y.acceleration_m_s2, expected, 1e-12 * std::abs(expected));
+  EXPECT_NEAR(y.drive_speed_rad_s, speed_rad_s, 1e-12);
+}
+
 TEST(EvPmBat, TheFollowerThroughTheCanCodecDrivesTheSameCar) {
   // the command crosses the DBC's 0.1 N m resolution: the car may differ by that, no more
   const Recorded direct = run("scenarios/evpm_sort1.toml");

@@ -131,6 +131,14 @@ TEST(AmDrive, SlipLimiterCutsToR2OverL1PlusL2KeepingTheSign) {
   EXPECT_FALSE(inside.slip_limited);
   EXPECT_FALSE(am_from_slip(p, lim, 80.0).slip_limited);  // at the bound: nothing cut
   EXPECT_EQ(am_slip_limit_rad_s(p), lim);
+  // the current limit's own entry (a vehicle feeding dWe as P15 does) clamps to the limiter
+  // first: where the current allows it, a slip beyond the limiter comes back at the limiter
+  AmDriveParams roomy = p;
+  roomy.I_max_rms_A = 1e6;
+  bool limited = true;
+  EXPECT_EQ(am_slip_within_current(roomy, 3.0 * lim, 80.0, limited), lim);
+  EXPECT_FALSE(limited);
+  EXPECT_EQ(am_slip_within_current(roomy, -1.5 * lim, 80.0, limited), -lim);
 }
 
 TEST(AmDrive, PowersBalance) {

@@ -67,6 +67,40 @@ TEST(PmDrive, MtpaIsTheLeastCurrentForTheTorque) {
   EXPECT_GT(amplitude(op), best - 1e-3);  // and the scan finds it too
 }
 
+// The check: gamma > 0 when Lq > Ld, equal to a brute-force maximisation of torque per
+// ampere within 1e-6 rad. At the drive's current amplitude I, scan gamma for the largest
+// T(gamma) = 1.5 pp (psi I cos g + (Lq - Ld) I^2 sin 2g / 2), then narrow the best cell by
+// ternary search (T is unimodal there) to 1e-12 rad.
+TEST(PmDrive, MtpaGammaIsTheBruteForceMaximumOfTorquePerAmpere) {
+  for (const PmDriveParams& p : {anisotropic(), isotropic()}) {
+    for (double t : {20.0, 120.0, 200.0}) {
+      const PmOperatingPoint op = pm_operating_point(p, t, 20.0, 300.0);
+      ASSERT_FALSE(op.current_limited || op.weakening) << t;
+      const double I = amplitude(op), gamma = std::atan2(-op.id_A, op.iq_A);
+      const auto torque = [&](double g) {
+        return 1.5 * p.pole_pairs * (p.psi_pm_Wb * I * std::cos(g) + 0.5 * (p.Lq_H - p.Ld_H) * I * I * std::sin(2 * g));
+      };
+      int best = 0;
+      constexpr int kCells = 100000;
+      const double cell = 0.5 * M_PI / kCells;
+      for (int k = 1; k <= kCells; ++k) {
+        if (torque(k * cell) > torque(best * cell)) best = k;
+      }
+      double lo = std::max(0.0, (best - 1) * cell), hi = std::min(0.5 * M_PI, (best + 1) * cell);
+      while (hi - lo > 1e-12) {
+        const double a = lo + (hi - lo) / 3, b = hi - (hi - lo) / 3;
+        (torque(a) < torque(b) ? lo : hi) = torque(a) < torque(b) ? a : b;
+      }
+      EXPECT_NEAR(gamma, 0.5 * (lo + hi), 1e-6) << t;
+      if (p.Lq_H > p.Ld_H) {
+        EXPECT_GT(gamma, 0.01) << t;  // reluctance torque pays for a negative Id
+      } else {
+        EXPECT_EQ(gamma, 0.0) << t;
+      }
+    }
+  }
+}
+
 TEST(PmDrive, FluxWeakeningHoldsTheVoltageAtItsLimitWithTheTorque) {
   for (const PmDriveParams& p : {isotropic(), anisotropic()}) {
     const double U = pm_voltage_limit_V(p, 300.0);
