@@ -156,6 +156,7 @@ io::JsonObject summary_json(const Scenario& sc, const Report& r, const std::vect
   if (st.fault != 0) {
     j.text("fault", fault_text(st.fault) + " at t = " + io::number_text(st.fault_time_s) + " s (step " +
                         std::to_string(st.fault_step) + ")");
+    j.integer("fault_steps", st.fault_steps);
   }
   j.text("scenario", sc.name);
   j.text("description", sc.description);
@@ -255,7 +256,8 @@ std::string summary_text(const Scenario& sc, const Report& r) {
   s += buf;
   if (st.fault != 0) {
     s += "FAULT         " + fault_text(st.fault) + " at t = " + io::number_text(st.fault_time_s) + " s (step " +
-         std::to_string(st.fault_step) + ")\n";
+         std::to_string(st.fault_step) + ")" +
+         (st.fault_steps > 1 ? ", " + std::to_string(st.fault_steps) + " steps with a fault" : std::string()) + "\n";
   }
   if (r.run.interrupted_by != 0) {
     s += "INTERRUPTED   at t = " + io::number_text(r.sim_s) + " s; outputs so far kept\n";

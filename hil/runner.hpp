@@ -35,6 +35,9 @@ struct RunStats {
   unsigned fault = 0;
   double fault_time_s = 0.0;
   std::int64_t fault_step = 0;
+  // grid points with any fault bit set: 1 when the fault stops the run; under the hold
+  // policy (HIL) every point the fault lasted, or came back
+  std::int64_t fault_steps = 0;
   std::int64_t rows_dropped = 0;  // rows not recorded because the buffer was not drained
 };
 
@@ -224,6 +227,7 @@ class Runner {
     if (n == 0) y0_ = y_;
     metrics_.observe(n, y_);
     const auto fault = static_cast<unsigned>(y_.fault);
+    if (fault != 0) ++stats_.fault_steps;
     if (fault != 0 && stats_.fault == 0) {
       stats_.fault = fault;
       stats_.fault_time_s = t_s;

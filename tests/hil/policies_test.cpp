@@ -96,6 +96,9 @@ TEST(FaultPolicy, StopEndsTheRunHoldKeepsItGoing) {
   EXPECT_EQ(stop.stats().fault, plant::kFaultSocWindow);
   EXPECT_EQ(hold.stats().fault, plant::kFaultSocWindow);
   EXPECT_EQ(hold.stats().fault_step, stop.stats().fault_step);  // the first one, in both
+  // counted: once where it stops, every grid point after it where it holds (SOC keeps falling)
+  EXPECT_EQ(stop.stats().fault_steps, 1);
+  EXPECT_EQ(hold.stats().fault_steps, 20000 - hold.stats().fault_step + 1);
 }
 
 TEST(Pacer, TickAfterIsTheNextTickOrSkipsTheMissedOnes) {

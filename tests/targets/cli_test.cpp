@@ -953,6 +953,7 @@ TEST(CliFaults, EachFaultBitStopsTheRunWithItsOwnText) {
     const std::string summary = slurp((root / c.name / "summary.json").string());
     EXPECT_HAS(summary, "\"status\": \"fault\"");
     EXPECT_HAS(summary, std::string("\"fault\": \"") + c.text);
+    EXPECT_HAS(summary, "\"fault_steps\": 1");  // the run stopped at it
     EXPECT_TRUE(fs::exists(root / c.name / "timeseries.csv")) << c.name;
   }
 }
