@@ -276,6 +276,28 @@ TEST(PmDrive, ACurrentLimitBelowTheNoLoadCurrentAtTopSpeedIsNamed) {
   EXPECT_EQ(problems.list()[0].value, "90");
 }
 
+// A vehicle solves MTPA once per command and hands it in (pm_mtpa): the same operating point,
+// bit for bit, as the solve from scratch, over MTPA, flux weakening, the voltage limit, the
+// current limit and regeneration.
+TEST(PmDrive, GivenMtpaCurrentsGiveTheSameOperatingPointBitForBit) {
+  const PmDriveParams p = anisotropic();
+  int compared = 0;
+  for (double t = -320.0; t <= 320.0; t += 7.3) {
+    const PmCurrents c = pm_mtpa(p, t);
+    for (double w = 0.0; w <= 330.0; w += 11.0) {
+      const PmOperatingPoint a = pm_operating_point(p, t, w, 300.0), b = pm_operating_point(p, t, w, 300.0, c);
+      ASSERT_EQ(a.id_A, b.id_A) << t << " " << w;
+      ASSERT_EQ(a.iq_A, b.iq_A) << t << " " << w;
+      ASSERT_EQ(a.torque_Nm, b.torque_Nm) << t << " " << w;
+      ASSERT_EQ(a.p_dc_W, b.p_dc_W) << t << " " << w;
+      ASSERT_EQ(a.weakening, b.weakening);
+      ASSERT_EQ(a.current_limited, b.current_limited);
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 2500);
+}
+
 TEST(PmDrive, ImpossibleMachineDataIsNamed) {
   PmDriveParams p;
   p.Ld_H = 0.0;
