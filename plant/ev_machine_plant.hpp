@@ -21,11 +21,12 @@
 // State and energy audit: those of the map-based EV (ev_state.hpp).
 // The drive's electrical state is algebraic (no states, §10.7 recommendation with the
 // algebraic current limit), solved at each evaluation from the same inputs, so the plant's
-// functions stay pure and a trajectory does not depend on which outputs were recorded.
+// functions stay pure and a trajectory does not depend on which outputs were recorded
+// (PmMachine remembers MTPA for the last command: a memo of a pure function, same bits).
 //
 // A Drive (PmMachine, AmMachine below the class) supplies: Params, Point (its operating
-// point), Outputs (its own signals), operate(), torque/power accessors, faults and the
-// torque limit reported to the ECU.
+// point), Outputs (its own signals), operate(), torque/power accessors, faults, the torque
+// limit reported to the ECU, and its own crossings with a Mode (none for AMDrive).
 
 #include <array>
 #include <cmath>

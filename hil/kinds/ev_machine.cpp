@@ -64,8 +64,9 @@ std::vector<SignalInfo> machine_ev_signals(const Scenario& sc) {
 // [drive] of an ev_am vehicle: the machine in SI units (AMDrive), or with per_unit = true in
 // p.u. of S_nom (AMDrivePU, base in plant/am_drive.hpp), checked in its own fields and then
 // converted to SI.
-plant::AmDriveParams read_am_drive_any(Reader r, Problems& problems) {
-  if (!r.flag("per_unit", false)) return read_am_drive(r);
+plant::AmDriveParams read_am_drive_any(Reader r, Problems& problems, bool& per_unit) {
+  per_unit = r.flag("per_unit", false);
+  if (!per_unit) return read_am_drive(r);
   plant::AmDrivePuParams pu;
   pu.S_nom_VA = r.required_number("S_nom_VA");
   pu.V_nom_rms_V = r.required_number("V_nom_rms_V");
@@ -91,8 +92,20 @@ plant::AmDriveParams read_am_drive_any(Reader r, Problems& problems) {
 extern const VehicleKind kEvAm{
     "ev_am",
     [](Reader& vr, const KindInput& in, Scenario& out, Problems& problems, Problems& warnings, Context& ctx) {
-      return read_machine_ev<plant::AmMachine>(vr, in, out, problems, warnings, ctx,
-                                               [&](Reader r, Context&) { return read_am_drive_any(r, problems); });
+      bool per_unit = false;
+      Problems found;
+      const KindRead read = read_machine_ev<plant::AmMachine>(
+          vr, in, out, found, warnings, ctx, [&](Reader r, Context&) { return read_am_drive_any(r, found, per_unit); });
+      // a p.u. file sets the U/f base voltage as V_nom_rms_V: name the field the file has
+      for (const plant::Problem& f : found.list()) {
+        const std::string field = per_unit && f.field == "drive.U_base_rms_V" ? "drive.V_nom_rms_V" : f.field;
+        if (f.row >= 0) {
+          problems.add_cell(field, static_cast<std::size_t>(f.row), f.column, f.value, f.expected);
+        } else {
+          problems.add(field, f.value, f.expected);
+        }
+      }
+      return read;
     },
     make_machine_ev<plant::AmMachine>, machine_ev_signals<plant::AmMachine>};
 

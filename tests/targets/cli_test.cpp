@@ -300,6 +300,10 @@ TEST_F(BadInput, ASetVoltageTheBatteryCannotSupplyIsNamed) {
   vehicle_ = slurp(ehpt::test::source_path("vehicles/evam_bat.toml"));
   replace(vehicle_, "U_base_rms_V = 100.0", "U_base_rms_V = 150.0");
   EXPECT_HAS(run().err, file("vehicle.toml") + ":28: drive.U_base_rms_V = 150: the DC bus cannot supply it");
+  // the same machine in per unit: named by the field its file has
+  vehicle_ = slurp(ehpt::test::source_path("vehicles/evam_pu_bat.toml"));
+  replace(vehicle_, "V_nom_rms_V = 100.0", "V_nom_rms_V = 150.0");
+  EXPECT_HAS(run().err, file("vehicle.toml") + ":23: drive.V_nom_rms_V = 150: the DC bus cannot supply it");
 }
 
 TEST_F(BadInput, ACurrentLimitBelowTheNoLoadCurrentIsNamed) {
