@@ -7,6 +7,8 @@
 //   stored-energy decrease = road work + drive losses + battery losses + brake
 //                            + change of kinetic energy (vehicle + rotor) + m g (h - h0)
 
+#include <array>
+
 #include "plant/battery_rc.hpp"
 #include "plant/signals.hpp"
 #include "plant/vehicle_body.hpp"
@@ -24,6 +26,10 @@ struct EvStateLayout {
   static constexpr int kRoadJ = kBodyAt + VehicleBody::kRoadJ, kBrakeJ = kBodyAt + VehicleBody::kBrakeJ;
   static constexpr int kEmf = kBatteryAt + BatteryRc::kEmf, kVrc = kBatteryAt + BatteryRc::kVrc;
   static constexpr int kBatteryOutJ = kIntegralsAt, kDriveLossJ = kIntegralsAt + 1, kBatteryLossJ = kIntegralsAt + 2;
+  // States no derivative reads (the audit's integrals and the altitude; the distance is read:
+  // a slope table is a function of it): implicit Euler skips their Jacobian columns.
+  static constexpr std::array<int, 6> kAuditOnlyStates = {kAltitude, kRoadJ, kBrakeJ, kBatteryOutJ, kDriveLossJ,
+                                                          kBatteryLossJ};
 };
 
 // The balance above between the states x0 and x (kNumStates values each; end of run, allocates).

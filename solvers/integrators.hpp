@@ -4,6 +4,7 @@
 // step allocates nothing, and neither throws: failures come back in IntegratorStatus.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include <Eigen/Core>
@@ -70,7 +71,11 @@ class ImplicitEuler {
   using Matrix = Eigen::Matrix<double, N, N>;
 
   explicit ImplicitEuler(const Plant& plant, int max_iterations = 20, double tolerance = 1e-10)
-      : plant_(plant), max_iterations_(max_iterations), tolerance_(tolerance) {}
+      : plant_(plant), max_iterations_(max_iterations), tolerance_(tolerance) {
+    if constexpr (requires { Plant::kAuditOnlyStates.size(); }) {
+      for (const int i : Plant::kAuditOnlyStates) audit_only_[i] = true;
+    }
+  }
 
   // Run phase: x(t_s) -> x(t_s + h_s). dx_start (dx/dt at the start) is not used: the
   // implicit step evaluates at the end of the step.
@@ -78,9 +83,15 @@ class ImplicitEuler {
                         const State* /*dx_start*/ = nullptr) {
     const double t1_s = t_s + h_s;
     x0_ = x;
-    // Jacobian of f at the start point, by forward differences
+    // Jacobian of f at the start point, by forward differences. A state no derivative reads
+    // (an energy integral, kept for the audit: Plant::kAuditOnlyStates, optional) has a
+    // column of exact zeros, as the difference would give it: skipped, same bits.
     plant_.derivatives(t1_s, x0_, m, u, f_);
     for (int j = 0; j < N; ++j) {
+      if (audit_only_[j]) {
+        jac_.col(j).setZero();
+        continue;
+      }
       xp_ = x0_;
       const double delta = 1.5e-8 * std::max(1.0, std::abs(x0_[j]));
       xp_[j] += delta;
@@ -113,6 +124,7 @@ class ImplicitEuler {
   int max_iterations_;
   double tolerance_;
   State x0_, xp_, f_, fp_, g_, dx_;
+  std::array<bool, N> audit_only_{};  // no derivative reads these states
   Matrix jac_;
   Eigen::PartialPivLU<Matrix> lu_;
 };

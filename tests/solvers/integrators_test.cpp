@@ -1,6 +1,11 @@
 // Orders of convergence measured on problems with known solutions, and stiffness.
 #include "solvers/integrators.hpp"
 
+#include <cstddef>
+
+#include "plant/bev_plant.hpp"
+#include "test_plants.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -112,3 +117,34 @@ TEST(ImplicitEuler, ReportsNewtonFailureInsteadOfThrowing) {
 
 }  // namespace
 }  // namespace ehpt::solvers
+
+// Implicit Euler skips the Jacobian columns of the states no derivative reads
+// (Plant::kAuditOnlyStates): the same steps, bit for bit, as with every column differenced.
+namespace {
+struct BevWithEveryColumn : ehpt::plant::BevPlant {
+  using ehpt::plant::BevPlant::BevPlant;
+  static constexpr std::nullptr_t kAuditOnlyStates = nullptr;  // hides the EV's list
+};
+}  // namespace
+
+TEST(ImplicitEuler, SkippingAuditOnlyColumnsChangesNoBit) {
+  using ehpt::plant::BevPlant;
+  static_assert(BevPlant::kAuditOnlyStates.size() == 6);
+  const BevPlant marked(ehpt::test::mbev("data/cycles/cycle_nedc.csv"));
+  const BevWithEveryColumn every(ehpt::test::mbev("data/cycles/cycle_nedc.csv"));
+  ehpt::solvers::ImplicitEuler<BevPlant> a(marked);
+  ehpt::solvers::ImplicitEuler<BevWithEveryColumn> b(every);
+  BevPlant::State xa = marked.initial_state();
+  xa[BevPlant::kSpeed] = 12.0;
+  BevPlant::State xb = xa;
+  const BevPlant::Modes m{ehpt::plant::Motion::kForward};
+  ehpt::msgs::EvCommand u;
+  for (int n = 0; n < 20000; ++n) {
+    u.driveTauRef_Nm = 60.0 * std::sin(1e-3 * n);  // drive and brake, the battery both ways
+    a.step(1e-3 * n, 1e-3, m, u, xa);
+    b.step(1e-3 * n, 1e-3, m, u, xb);
+    for (int i = 0; i < BevPlant::kNumStates; ++i) ASSERT_EQ(xa[i], xb[i]) << "step " << n << " state " << i;
+  }
+  EXPECT_GT(xa[BevPlant::kBatteryOutJ], 0.0);  // the integrals did integrate
+  EXPECT_GT(xa[BevPlant::kDistance], 100.0);
+}
