@@ -79,6 +79,10 @@ class PsdPlant {
   static constexpr int kEmf = kBatteryAt + BatteryRc::kEmf, kVrc = kBatteryAt + BatteryRc::kVrc;
   static constexpr int kIceWorkJ = kIntegralsAt, kBatteryOutJ = kIntegralsAt + 1, kGenLossJ = kIntegralsAt + 2,
                        kMotLossJ = kIntegralsAt + 3, kBatteryLossJ = kIntegralsAt + 4;
+  // States no derivative reads (fuel, the audit's integrals, the altitude): implicit Euler
+  // skips their Jacobian columns (solvers/integrators.hpp)
+  static constexpr std::array<int, 9> kAuditOnlyStates = {kAltitude,  kRoadJ,       kBrakeJ,   kFuelKg,      kIceWorkJ,
+                                                          kBatteryOutJ, kGenLossJ, kMotLossJ, kBatteryLossJ};
   static constexpr int kNumCrossings = 1;
   using State = Eigen::Matrix<double, kNumStates, 1>;
   struct Modes {

@@ -4,6 +4,7 @@
 #include <cstddef>
 
 #include "plant/bev_plant.hpp"
+#include "plant/psd_plant.hpp"
 #include "test_plants.hpp"
 
 #include <gtest/gtest.h>
@@ -147,4 +148,37 @@ TEST(ImplicitEuler, SkippingAuditOnlyColumnsChangesNoBit) {
   }
   EXPECT_GT(xa[BevPlant::kBatteryOutJ], 0.0);  // the integrals did integrate
   EXPECT_GT(xa[BevPlant::kDistance], 100.0);
+}
+
+// The same for the paper's hybrid: 9 of its 14 states are audit-only (fuel included).
+namespace {
+struct PsdWithEveryColumn : ehpt::plant::PsdPlant {
+  using ehpt::plant::PsdPlant::PsdPlant;
+  static constexpr std::nullptr_t kAuditOnlyStates = nullptr;
+};
+}  // namespace
+
+TEST(ImplicitEuler, SkippingAuditOnlyColumnsChangesNoBitInTheHybrid) {
+  using ehpt::plant::PsdPlant;
+  const ehpt::hil::Scenario sc = ehpt::test::load(ehpt::test::source_path("scenarios/psecu2_nedc.toml"));
+  const auto& p = std::get<ehpt::plant::PsdParams>(sc.plant);
+  const PsdPlant marked(p);
+  const PsdWithEveryColumn every(p);
+  ehpt::solvers::ImplicitEuler<PsdPlant> a(marked);
+  ehpt::solvers::ImplicitEuler<PsdWithEveryColumn> b(every);
+  PsdPlant::State xa = marked.initial_state();
+  xa[PsdPlant::kIceSpeed] = 150.0;
+  xa[PsdPlant::kRingSpeed] = 200.0;
+  PsdPlant::State xb = xa;
+  const PsdPlant::Modes m = marked.initial_modes(xa);
+  ehpt::msgs::PsdCommand u;
+  for (int n = 0; n < 20000; ++n) {
+    u.icePowRef_W = 15000.0 + 10000.0 * std::sin(1e-3 * n);  // the engine running, its fuel flowing
+    u.iceON = true;
+    u.motTauRef_Nm = 40.0 * std::sin(2e-3 * n);
+    a.step(1e-3 * n, 1e-3, m, u, xa);
+    b.step(1e-3 * n, 1e-3, m, u, xb);
+    for (int i = 0; i < PsdPlant::kNumStates; ++i) ASSERT_EQ(xa[i], xb[i]) << "step " << n << " state " << i;
+  }
+  EXPECT_GT(xa[PsdPlant::kFuelKg], 0.0);
 }
