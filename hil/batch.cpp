@@ -1,12 +1,22 @@
 #include "hil/batch.hpp"
 
+#include <pthread.h>
+#include <time.h>
+
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstring>
+#include <memory>
+#include <optional>
 #include <ostream>
 
+#include "hil/alloc_guard.hpp"
+#include "hil/pacer.hpp"
+#include "hil/row_queue.hpp"
 #include "hil/simulation.hpp"
+#include "hil/trajectory_hash.hpp"
 #include "io/number_format.hpp"
 #include "io/text_file.hpp"
 
@@ -53,12 +63,60 @@ std::vector<int> chosen_columns(const Scenario& sc, const std::vector<SignalInfo
   return columns;
 }
 
+// What the real-time loop did (BatchOptions::realtime), for the summary.
+struct RealtimeRun {
+  RealtimeOptions requested;
+  RealtimeSetup setup;
+  std::int64_t steps_per_tick = 1;
+  TickTiming timing;
+  std::int64_t rows_dropped = 0;  // the writer thread fell behind by the whole queue
+  std::size_t queue_rows = 0;
+};
+
 // How the stepping went: wall times, a signal that stopped it, a write error.
 struct Streamed {
   int interrupted_by = 0;  // signal number
   double wall_s = 0.0, run_wall_s = 0.0;
   std::string csv_error;   // the first write error (the run stops there)
+  TrajectoryHash hash;     // over every recorded value
+  // heap allocations (malloc level, whole process) between start-up and the end of the loop;
+  // nullopt: the binary has no allocation guard hooks
+  std::optional<std::int64_t> heap_allocations;
+  std::string first_allocation;  // where the first one was (a backtrace line)
+  std::unique_ptr<RealtimeRun> realtime;  // set when the real-time loop ran
 };
+
+// The CSV text is written whenever this much is buffered: a fixed buffer, no growth in the loop.
+constexpr std::size_t kCsvFlushBytes = 64 * 1024;
+constexpr std::size_t kMaxNumberChars = 32;  // io::append_number writes at most 25, and a separator
+
+void write_text(io::TextFileWriter& csv, std::string& text, std::string& error) {
+  if (error.empty() && !text.empty()) csv.write(text, error);
+  text.clear();
+}
+
+// The allocation guard (hil/alloc_guard.hpp) counts from the end of start-up to the end of
+// the loop, every thread of the process included (the writer thread, the bus).
+void start_counting_allocations() {
+  alloc_guard::reset();
+  alloc_guard::arm();
+}
+template <class Out>
+void stop_counting_allocations(Out& out) {
+  alloc_guard::disarm();
+  if (!alloc_guard::active()) return;
+  out.heap_allocations = alloc_guard::count();
+  if (*out.heap_allocations > 0) out.first_allocation = alloc_guard::describe_first();
+}
+
+// Rows -> CSV text; the hash sees the same values.
+void append_rows(std::string& text, std::span<const double> rows, std::size_t columns, TrajectoryHash& hash) {
+  hash.add(rows);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    io::append_number(text, rows[i]);
+    text += (i + 1) % columns == 0 ? '\n' : ',';
+  }
+}
 
 // Runs the simulation in chunks and writes its rows to the CSV between chunks (the run phase
 // is inside Simulation::run: no I/O there), with the progress line.
@@ -66,6 +124,8 @@ Streamed stream(Simulation& sim, const Scenario& sc, std::string text, std::size
                 io::TextFileWriter& csv, const BatchOptions& opt, std::ostream& log) {
   Streamed out;
   const auto wall_start = std::chrono::steady_clock::now();
+  text.reserve(kCsvFlushBytes + kMaxNumberChars * columns + text.size());
+  start_counting_allocations();
   for (;;) {
     const auto t0 = std::chrono::steady_clock::now();
     if (opt.driver != nullptr) {
@@ -74,15 +134,15 @@ Streamed stream(Simulation& sim, const Scenario& sc, std::string text, std::size
       sim.run(opt.stop_signal);
     }
     out.run_wall_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    // row by row into a text buffer of fixed size (reserved below): written whenever it fills
     const auto rows = sim.rows();
-    for (std::size_t i = 0; i < rows.size(); ++i) {
-      io::append_number(text, rows[i]);
-      text += (i + 1) % columns == 0 ? '\n' : ',';
+    for (std::size_t r = 0; r < rows.size(); r += columns) {
+      append_rows(text, rows.subspan(r, columns), columns, out.hash);
+      if (text.size() >= kCsvFlushBytes) write_text(csv, text, out.csv_error);
     }
     sim.clear_rows();
-    if (out.csv_error.empty()) csv.write(text, out.csv_error);
+    write_text(csv, text, out.csv_error);
     if (out.csv_error.empty() && opt.driver != nullptr) opt.driver->flush(out.csv_error);
-    text.clear();
     if (opt.progress) {
       char buf[96];
       std::snprintf(buf, sizeof buf, "\r[%3d%%] t = %.1f s of %.1f s",
@@ -96,7 +156,176 @@ Streamed stream(Simulation& sim, const Scenario& sc, std::string text, std::size
       break;
     }
   }
+  stop_counting_allocations(out);
   if (opt.progress) log << "\n";
+  if (out.csv_error.empty()) csv.close(out.csv_error);
+  out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  return out;
+}
+
+// The writer thread of the real-time loop: pops the rows the loop pushed, formats and writes
+// them (and the progress line), so that no file write ever blocks a tick. It runs under
+// SCHED_OTHER with a small stack (mlockall would lock a default 8 MB one) and does not
+// allocate: its text buffer is reserved before it starts.
+class RowWriter {
+ public:
+  RowWriter(RowQueue& queue, io::TextFileWriter& csv, std::string header, TrajectoryHash& hash, bool progress,
+            const Scenario& sc, const std::atomic<std::int64_t>& step, std::ostream& log)
+      : queue_(queue), csv_(csv), text_(std::move(header)), hash_(hash), progress_(progress), sc_(sc), step_(step),
+        log_(log) {
+    text_.reserve(kCsvFlushBytes + kMaxNumberChars * queue.columns() + text_.size());
+  }
+
+  // Start-up: false (and why) if the thread cannot start.
+  bool start(std::string& error) {
+    pthread_attr_t attr;
+    pthread_attr_init(&attr);
+    pthread_attr_setstacksize(&attr, 256 * 1024);
+    // not the loop's SCHED_FIFO, whatever the creating thread has
+    pthread_attr_setinheritsched(&attr, PTHREAD_EXPLICIT_SCHED);
+    pthread_attr_setschedpolicy(&attr, SCHED_OTHER);
+    sched_param sp{};
+    pthread_attr_setschedparam(&attr, &sp);
+    const int rc = pthread_create(&thread_, &attr, &RowWriter::main, this);
+    pthread_attr_destroy(&attr);
+    if (rc != 0) {
+      error = std::string("cannot start the writer thread: ") + std::strerror(rc);
+      return false;
+    }
+    started_ = true;
+    return true;
+  }
+  // Shutdown: the rows left are written, the thread joined; the first write error, if any.
+  std::string finish() {
+    if (started_) {
+      done_.store(true, std::memory_order_release);
+      pthread_join(thread_, nullptr);
+      started_ = false;
+    }
+    return error_;
+  }
+  ~RowWriter() { finish(); }
+
+ private:
+  static void* main(void* self) {
+    static_cast<RowWriter*>(self)->loop();
+    return nullptr;
+  }
+  void loop() {
+    std::int64_t next_progress_ns = 0;
+    for (;;) {
+      const bool last = done_.load(std::memory_order_acquire);  // rows pushed before done: all popped now
+      queue_.pop_all([&](std::span<const double> row) {
+        append_rows(text_, row, row.size(), hash_);
+        if (text_.size() >= kCsvFlushBytes) write();
+      });
+      write();
+      if (progress_) {
+        timespec ts{};
+        clock_gettime(CLOCK_MONOTONIC, &ts);
+        const std::int64_t now = ts.tv_sec * 1'000'000'000LL + ts.tv_nsec;
+        if (now >= next_progress_ns || last) {
+          next_progress_ns = now + 500'000'000;
+          const std::int64_t n = step_.load(std::memory_order_relaxed);
+          char buf[96];
+          std::snprintf(buf, sizeof buf, "\r[%3d%%] t = %.1f s of %.1f s (real time)",
+                        static_cast<int>(100.0 * static_cast<double>(n) / static_cast<double>(std::max<std::int64_t>(1, sc_.solver.steps))),
+                        static_cast<double>(n) * sc_.solver.step_s, sc_.solver.duration_s);
+          log_ << buf << std::flush;
+        }
+      }
+      if (last) break;
+      const timespec nap{0, 2'000'000};  // 2 ms: the loop never waits for us
+      nanosleep(&nap, nullptr);
+    }
+    if (progress_) log_ << "\n";
+  }
+  void write() {
+    if (text_.empty()) return;
+    if (error_.empty()) csv_.write(text_, error_);
+    text_.clear();
+  }
+
+  RowQueue& queue_;
+  io::TextFileWriter& csv_;
+  std::string text_;
+  TrajectoryHash& hash_;
+  bool progress_;
+  const Scenario& sc_;
+  const std::atomic<std::int64_t>& step_;
+  std::ostream& log_;
+  pthread_t thread_{};
+  bool started_ = false;
+  std::atomic<bool> done_{false};
+  std::string error_;  // the writer's first write error
+};
+
+// The real-time loop: one tick per period on absolute deadlines (TickPacer over
+// MonotonicClock), the loop's thread under SCHED_FIFO with its memory locked; per tick the
+// driver's IO (a bus) and the plant's steps, then the rows to the writer thread. Timing in
+// preallocated histograms; a signal ends it at the next tick with every row written.
+Streamed stream_realtime(Simulation& sim, const Scenario& sc, std::string header, std::size_t columns,
+                         io::TextFileWriter& csv, const BatchOptions& opt, std::ostream& log) {
+  Streamed out;
+  out.realtime = std::make_unique<RealtimeRun>();
+  RealtimeRun& rt = *out.realtime;
+  rt.requested = *opt.realtime;
+  const double period_s = opt.realtime->period_s > 0.0 ? opt.realtime->period_s : sc.solver.step_s;
+  rt.steps_per_tick = std::max<std::int64_t>(1, std::llround(period_s / sc.solver.step_s));
+  rt.requested.period_s = period_s;
+  // about two seconds of rows, within 4 MB: the writer wakes every 2 ms
+  const double rows_per_s = 1.0 / (sc.solver.step_s * static_cast<double>(sc.output.decimation));
+  const std::size_t max_rows = (4u << 20) / (8 * std::max<std::size_t>(columns, 1));
+  rt.queue_rows = std::clamp<std::size_t>(static_cast<std::size_t>(2.0 * rows_per_s) + 16, 64, max_rows);
+  RowQueue queue(columns, rt.queue_rows);
+  std::atomic<std::int64_t> step{0};
+  RowWriter writer(queue, csv, std::move(header), out.hash, opt.progress, sc, step, log);
+  const auto wall_start = std::chrono::steady_clock::now();
+  if (!writer.start(out.csv_error)) return out;
+  rt.setup = enter_realtime(rt.requested);
+
+  MonotonicClock clock;
+  TickPacer<MonotonicClock> pacer(clock, static_cast<std::int64_t>(std::llround(period_s * 1e9)), rt.timing);
+  if (opt.driver != nullptr) opt.driver->start(sim, opt.stop_signal);
+  const auto run_start = std::chrono::steady_clock::now();
+  start_counting_allocations();
+  pacer.start();
+  for (;;) {
+    std::int64_t io_ns = 0, compute_ns = 0;
+    for (std::int64_t k = 0; k < rt.steps_per_tick && !sim.finished(); ++k) {
+      std::int64_t t = clock.now_ns();
+      if (opt.driver != nullptr) {
+        opt.driver->exchange(sim);
+        const std::int64_t t1 = clock.now_ns();
+        io_ns += t1 - t;
+        t = t1;
+      }
+      sim.step(1);
+      compute_ns += clock.now_ns() - t;
+    }
+    const std::int64_t t = clock.now_ns();
+    queue.push(sim.rows());
+    sim.clear_rows();
+    step.store(sim.step_index(), std::memory_order_relaxed);
+    io_ns += clock.now_ns() - t;
+    rt.timing.compute.record(compute_ns);
+    rt.timing.io.record(io_ns);
+    if (sim.finished()) break;
+    if (opt.stop_signal != nullptr && opt.stop_signal->load() != 0) break;
+    if (!pacer.wait_next_tick(opt.stop_signal)) break;
+  }
+  out.run_wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - run_start).count();
+  leave_realtime(rt.setup);
+  if (!sim.finished() && opt.stop_signal != nullptr && opt.stop_signal->load() != 0) {
+    out.interrupted_by = opt.stop_signal->load();
+    sim.run(opt.stop_signal);  // records the state the run reached, steps nothing
+    queue.push(sim.rows());
+    sim.clear_rows();
+  }
+  rt.rows_dropped = queue.dropped();
+  out.csv_error = writer.finish();
+  stop_counting_allocations(out);  // the writer's last rows included
+  if (out.csv_error.empty() && opt.driver != nullptr) opt.driver->flush(out.csv_error);
   if (out.csv_error.empty()) csv.close(out.csv_error);
   out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return out;
@@ -146,6 +375,61 @@ std::string audit_warning(const Scenario& sc, const Report& r) {
   std::snprintf(rel, sizeof rel, "%.3g", r.relative);
   return std::string("the energy audit does not close: relative residual ") + rel + " > " +
          io::number_text(kAuditWarnRelative) + ". Likely causes: " + causes + ". Treat the results with care.";
+}
+
+double us(std::int64_t ns) { return static_cast<double>(ns) / 1000.0; }
+
+io::JsonObject quantiles_json(const LatencyHistogram& h, bool p999) {
+  io::JsonObject q;
+  q.number("p50", us(h.quantile_ns(0.5)));
+  q.number("p99", us(h.quantile_ns(0.99)));
+  if (p999) q.number("p99_9", us(h.quantile_ns(0.999)));
+  q.number("max", us(h.max_ns()));
+  q.number("mean", h.mean_ns() / 1000.0);
+  return q;
+}
+
+io::JsonObject realtime_json(const RealtimeRun& rt) {
+  io::JsonObject j;
+  j.number("period_s", rt.requested.period_s);
+  j.integer("steps_per_tick", rt.steps_per_tick);
+  j.text("scheduler", rt.setup.fifo ? "SCHED_FIFO" : "SCHED_OTHER");
+  j.integer("priority", rt.setup.fifo ? rt.requested.priority : 0);
+  if (rt.requested.cpu >= 0) j.integer("cpu", rt.requested.cpu);
+  j.boolean("pinned", rt.setup.pinned);
+  j.boolean("memory_locked", rt.setup.memory_locked);
+  j.integer("ticks", rt.timing.ticks);
+  j.integer("overruns", rt.timing.overruns);
+  j.integer("missed_ticks", rt.timing.missed_ticks);
+  j.integer("queue_rows", static_cast<std::int64_t>(rt.queue_rows));
+  j.integer("queue_rows_dropped", rt.rows_dropped);
+  j.object("wakeup_latency_us", quantiles_json(rt.timing.wakeup, true));
+  j.object("compute_us", quantiles_json(rt.timing.compute, false));
+  j.object("io_us", quantiles_json(rt.timing.io, false));
+  j.strings("setup_warnings", rt.setup.warnings);
+  return j;
+}
+
+std::string realtime_text(const RealtimeRun& rt) {
+  const TickTiming& t = rt.timing;
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "real time     %s%s, period %.6g s (%lld step%s per tick)%s%s: %lld ticks, %lld overruns, "
+                "%lld ticks missed\n"
+                "  wake-up     p50 %.1f us, p99 %.1f us, p99.9 %.1f us, max %.1f us\n"
+                "  compute     p50 %.2f us, p99 %.2f us, max %.1f us; io p50 %.2f us, p99 %.2f us, max %.1f us\n",
+                rt.setup.fifo ? "SCHED_FIFO priority " : "SCHED_OTHER",
+                rt.setup.fifo ? std::to_string(rt.requested.priority).c_str() : "", rt.requested.period_s,
+                static_cast<long long>(rt.steps_per_tick), rt.steps_per_tick == 1 ? "" : "s",
+                rt.setup.pinned ? (", CPU " + std::to_string(rt.requested.cpu)).c_str() : "",
+                rt.setup.memory_locked ? ", memory locked" : "", static_cast<long long>(t.ticks),
+                static_cast<long long>(t.overruns), static_cast<long long>(t.missed_ticks),
+                us(t.wakeup.quantile_ns(0.5)), us(t.wakeup.quantile_ns(0.99)), us(t.wakeup.quantile_ns(0.999)),
+                us(t.wakeup.max_ns()), us(t.compute.quantile_ns(0.5)), us(t.compute.quantile_ns(0.99)),
+                us(t.compute.max_ns()), us(t.io.quantile_ns(0.5)), us(t.io.quantile_ns(0.99)), us(t.io.max_ns()));
+  std::string s = buf;
+  if (rt.rows_dropped > 0) s += "  WARNING     " + std::to_string(rt.rows_dropped) + " rows dropped: the writer fell behind\n";
+  return s;
 }
 
 io::JsonObject summary_json(const Scenario& sc, const Report& r, const std::vector<std::string>& warnings) {
@@ -213,6 +497,15 @@ io::JsonObject summary_json(const Scenario& sc, const Report& r, const std::vect
   j.number("run_wall_time_s", r.run.run_wall_s);
   j.number("realtime_factor", r.run.run_wall_s > 0.0 ? r.sim_s / r.run.run_wall_s : NAN);
   j.number("ns_per_step", st.steps_done > 0 ? 1e9 * r.run.run_wall_s / st.steps_done : NAN);
+  j.text("trajectory_hash", r.run.hash.hex());
+  if (r.run.heap_allocations) {
+    j.integer("heap_allocations_after_startup", *r.run.heap_allocations);
+    if (*r.run.heap_allocations > 0) j.text("first_heap_allocation", r.run.first_allocation);
+  } else {
+    j.null("heap_allocations_after_startup");  // a binary without the allocation guard
+  }
+  j.number("peak_rss_MB", static_cast<double>(peak_rss_bytes()) / (1024.0 * 1024.0));
+  if (r.run.realtime) j.object("realtime", realtime_json(*r.run.realtime));
   j.strings("warnings", warnings);
   return j;
 }
@@ -259,6 +552,11 @@ std::string summary_text(const Scenario& sc, const Report& r) {
          std::to_string(st.fault_step) + ")" +
          (st.fault_steps > 1 ? ", " + std::to_string(st.fault_steps) + " steps with a fault" : std::string()) + "\n";
   }
+  if (r.run.realtime) s += realtime_text(*r.run.realtime);
+  if (r.run.heap_allocations.value_or(0) > 0) {
+    s += "ALLOCATIONS   " + std::to_string(*r.run.heap_allocations) + " heap allocations after start-up; the first: " +
+         r.run.first_allocation + "\n";
+  }
   if (r.run.interrupted_by != 0) {
     s += "INTERRUPTED   at t = " + io::number_text(r.sim_s) + " s; outputs so far kept\n";
   }
@@ -300,13 +598,18 @@ BatchResult run_batch(const Scenario& sc, const BatchOptions& opt, std::ostream&
     sim_opt.fault_policy = FaultPolicy::kHold;
   }
   const std::unique_ptr<Simulation> sim = make_simulation(sc, sim_opt);
-  const Report r = report_of(*sim, stream(*sim, sc, header, columns.size(), csv, opt, log));
+  const Report r = report_of(*sim, opt.realtime != nullptr
+                                       ? stream_realtime(*sim, sc, header, columns.size(), csv, opt, log)
+                                       : stream(*sim, sc, header, columns.size(), csv, opt, log));
   if (r.st.fault != 0) {
     res.exit_code = 3;
   } else if (r.run.interrupted_by != 0) {
     res.exit_code = 128 + r.run.interrupted_by;  // the shell's convention: 130 SIGINT, 143 SIGTERM, 129 SIGHUP
   }
   if (!r.audit_closes) res.warnings.push_back(audit_warning(sc, r));
+  if (r.run.realtime) {
+    for (const std::string& w : r.run.realtime->setup.warnings) res.warnings.push_back(w);
+  }
   std::vector<std::string> warnings = sc.warnings;
   warnings.insert(warnings.end(), res.warnings.begin(), res.warnings.end());
   res.summary = summary_json(sc, r, warnings);

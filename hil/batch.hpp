@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "hil/config.hpp"
+#include "hil/realtime.hpp"
 #include "io/output_dir.hpp"
 
 namespace ehpt::hil {
@@ -27,6 +28,16 @@ class ExternalDriver {
   // Run phase: advances at most max_steps steps (the row buffer's size); may wait for the ECU
   // or the wall clock; returns when done, stopped (stop != 0) or max_steps are taken.
   virtual void advance(Simulation& sim, std::int64_t max_steps, const std::atomic<int>* stop) = 0;
+  // The real-time loop (BatchOptions::realtime) paces the steps itself and asks the driver
+  // only for its IO: start() once before t = 0 (may wait for the ECU: not timed), then
+  // exchange() before every step (receive, send the sample at ECU steps, staleness; never
+  // waits). False from realtime_capable: why it cannot run so (lockstep waits for the ECU).
+  virtual bool realtime_capable(std::string& why) const {
+    why = "this driver has no real-time mode";
+    return false;
+  }
+  virtual void start(Simulation&, const std::atomic<int>*) {}
+  virtual void exchange(Simulation&) {}
   // Between chunks and at the end: the driver's own files (bus.log); false and error on failure.
   virtual bool flush(std::string& error) = 0;
   // The end: its figures, into summary.json ("bus") and onto the terminal.
@@ -43,6 +54,8 @@ struct BatchOptions {
   // returns false on failure (the run is still committed, BatchResult::after_failed is set)
   std::function<bool(const std::string& dir)> before_commit;
   ExternalDriver* driver = nullptr;  // null: the built-in ECU, as fast as possible
+  // set: the real-time loop (SCHED_FIFO, absolute deadlines, rows to a writer thread)
+  const RealtimeOptions* realtime = nullptr;
 };
 
 // A run whose energy audit does not close to this relative residual (0.1 %) is flagged.

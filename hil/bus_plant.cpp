@@ -43,9 +43,7 @@ class BusPlant final : public ExternalDriver {
 
   void advance(Simulation& sim, std::int64_t max_steps, const std::atomic<int>* stop) override {
     if (!started_) {
-      started_ = true;
-      wait_for_peer(stop);
-      first_command(sim, stop);
+      start(sim, stop);
       if (!opt_.lockstep) pacer_.wait_for_step(0);
     }
     const std::int64_t end = std::min(sim.total_steps(), sim.step_index() + max_steps);
@@ -64,9 +62,7 @@ class BusPlant final : public ExternalDriver {
         sim.step(k);
         if (k == 0 && !sim.finished()) return;  // the chunk is full: the rows go out first
       } else {
-        drain(sim, n);
-        if (n % ratio_ == 0 && n != last_sample_) send_sample(sim, n);
-        check_staleness(sim, n);
+        exchange(sim);
         if (n >= end && n < sim.total_steps()) return;
         sim.step(n < sim.total_steps() ? 1 : 0);
         pacer_.wait_for_step(sim.step_index());
@@ -75,12 +71,37 @@ class BusPlant final : public ExternalDriver {
     }
   }
 
+  bool realtime_capable(std::string& why) const override {
+    if (opt_.lockstep) {
+      why = "--lockstep waits for the ECU's command at every sample: it cannot keep a real-time period (use one or the other)";
+      return false;
+    }
+    return true;
+  }
+
+  // Before t = 0 (both pacers): the ECU connects and answers sample 0.
+  void start(Simulation& sim, const std::atomic<int>* stop) override {
+    if (started_) return;
+    started_ = true;
+    wait_for_peer(stop);
+    first_command(sim, stop);
+  }
+
+  // The wall-clock and real-time pacers' IO before each step: what came in, the sample at
+  // an ECU step, the staleness check. Never waits.
+  void exchange(Simulation& sim) override {
+    const std::int64_t n = sim.step_index();
+    drain(sim, n);
+    if (n % ratio_ == 0 && n != last_sample_) send_sample(sim, n);
+    check_staleness(sim, n);
+  }
+
   bool flush(std::string& error) override { return wire_.flush(error); }
 
   void report(io::JsonObject& summary, std::string& text) const override {
     io::JsonObject b;
     b.text("transport", wire_.describe());
-    b.text("pacing", opt_.lockstep ? "lockstep" : "wall_clock");
+    b.text("pacing", pacing());
     b.number("ecu_period_s", period_s_);
     b.number("command_timeout_s", timeout_s_);
     std::int64_t rejected = 0;
@@ -100,7 +121,7 @@ class BusPlant final : public ExternalDriver {
     if (opt_.lockstep) {
       b.integer("lockstep_waits_timed_out", waits_timed_out_);
       b.object("round_trip_us", timing);
-    } else {
+    } else if (!opt_.realtime) {  // real time: the loop's own figures ("realtime")
       b.integer("missed_ticks", pacer_.missed_ticks());
       b.object("period_error_us", timing);
     }
@@ -110,13 +131,14 @@ class BusPlant final : public ExternalDriver {
     std::snprintf(buf, sizeof buf,
                   "bus           %s, %s: %lld %s in, %lld out, %lld rejected; %lld commands, %lld stale samples, "
                   "%lld timeouts (%.3f s in the safe state), longest command gap %.3f s\n",
-                  wire_.describe().c_str(), opt_.lockstep ? "lockstep" : "wall clock",
+                  wire_.describe().c_str(), opt_.lockstep ? "lockstep" : opt_.realtime ? "real time" : "wall clock",
                   static_cast<long long>(wire_.messages_in()), Wire::kUnit,
                   static_cast<long long>(wire_.messages_out()), static_cast<long long>(rejected),
                   static_cast<long long>(commands_applied_), static_cast<long long>(stale_samples_),
                   static_cast<long long>(timeouts_), static_cast<double>(safe_steps()) * h_s_,
                   static_cast<double>(longest_gap_steps_) * h_s_);
     text += buf;
+    if (opt_.realtime) return;
     std::snprintf(buf, sizeof buf, "bus timing    %s p50 %.0f us, p99 %.0f us, max %.0f us\n",
                   opt_.lockstep ? "round trip" : "period error", hist.quantile_us(0.5), hist.quantile_us(0.99),
                   hist.max_us());
@@ -124,6 +146,8 @@ class BusPlant final : public ExternalDriver {
   }
 
  private:
+  const char* pacing() const { return opt_.lockstep ? "lockstep" : opt_.realtime ? "realtime" : "wall_clock"; }
+
   // steps spent in the safe state (up to the last one seen, if still in it)
   std::int64_t safe_steps() const { return safe_steps_ + (safe_ ? last_step_ - safe_since_step_ : 0); }
 

@@ -29,6 +29,7 @@ namespace ehpt::hil {
 
 struct BusPlantOptions {
   bool lockstep = false;
+  bool realtime = false;  // the batch's real-time loop paces it (start/exchange), not advance
   double command_timeout_s = 0.0;  // 0: 3 ECU periods
   // lockstep: how long (wall) the plant waits for the command of a sample before it goes on
   // without one (the command then ages like a late one on a real bus)

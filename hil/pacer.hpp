@@ -8,9 +8,15 @@
 //   never caught up in a burst. (A lockstep pacer, waiting for the ECU's command, and the
 //   real-time SCHED_FIFO pacer plug in the same way.)
 
+#include <time.h>
+
+#include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cstdint>
 #include <thread>
+
+#include "hil/latency_histogram.hpp"
 
 namespace ehpt::hil {
 
@@ -72,6 +78,83 @@ struct SteadyClock {
   void sleep_until_ns(std::int64_t t_ns) const {
     std::this_thread::sleep_until(std::chrono::steady_clock::time_point(std::chrono::nanoseconds(t_ns)));
   }
+};
+
+// The real-time loop's clock: CLOCK_MONOTONIC, and absolute deadlines with clock_nanosleep
+// (TIMER_ABSTIME: a late wake-up is not carried into the next period, unlike a relative
+// sleep). sleep_until_ns returns early only when a signal interrupts it.
+struct MonotonicClock {
+  std::int64_t now_ns() const {
+    timespec ts{};
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+  }
+  void sleep_until_ns(std::int64_t t_ns) const {
+    const timespec ts{static_cast<time_t>(t_ns / 1'000'000'000), static_cast<long>(t_ns % 1'000'000'000)};
+    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+  }
+};
+
+// Per-tick timing of the real-time loop, in preallocated histograms: wake-up latency (how
+// late the loop woke after its deadline), compute (the plant's steps) and IO (bus exchange,
+// rows handed to the writer), with the overrun counters.
+struct TickTiming {
+  std::int64_t ticks = 0;         // ticks the loop ran
+  std::int64_t overruns = 0;      // ticks whose work ended after the next tick's deadline
+  std::int64_t missed_ticks = 0;  // ticks skipped because of them (never caught up)
+  LatencyHistogram wakeup, compute, io;
+};
+
+// The real-time pacer: tick k is due at start + k period (absolute deadlines on one grid).
+// Overrun policy: when a tick's work ends after later deadlines have passed, those ticks are
+// skipped and counted, and the loop waits for the first deadline still ahead: it never runs
+// ticks back to back to catch up (the plant then lags the wall clock by the skipped ticks).
+// Clock: now_ns(), sleep_until_ns(t) (MonotonicClock; a fake one in the tests).
+template <class Clock>
+class TickPacer {
+ public:
+  TickPacer(Clock& clock, std::int64_t period_ns, TickTiming& timing)
+      : clock_(clock), period_ns_(period_ns), timing_(timing) {}
+
+  // Tick 0 is now: the loop's first work starts at once.
+  void start() {
+    start_ns_ = clock_.now_ns();
+    tick_ = 0;
+    timing_.ticks = 1;
+    timing_.wakeup.record(0);
+  }
+
+  // Run phase: sleeps until the next tick's deadline (skipping those already past, counted)
+  // and records how late it woke. False if stop was raised while it slept (no tick then).
+  bool wait_next_tick(const std::atomic<int>* stop = nullptr) {
+    const NextTick next = tick_after(tick_, clock_.now_ns(), start_ns_, period_ns_);
+    if (next.missed > 0) {
+      ++timing_.overruns;
+      timing_.missed_ticks += next.missed;
+    }
+    tick_ = next.tick;
+    const std::int64_t deadline = start_ns_ + tick_ * period_ns_;
+    for (;;) {
+      clock_.sleep_until_ns(deadline);
+      const std::int64_t now = clock_.now_ns();
+      if (now >= deadline) {
+        timing_.wakeup.record(now - deadline);
+        ++timing_.ticks;
+        return true;
+      }
+      if (stop != nullptr && stop->load(std::memory_order_relaxed) != 0) return false;  // a signal woke us
+    }
+  }
+
+  std::int64_t tick() const { return tick_; }
+  std::int64_t deadline_ns() const { return start_ns_ + tick_ * period_ns_; }
+  std::int64_t period_ns() const { return period_ns_; }
+
+ private:
+  Clock& clock_;
+  std::int64_t period_ns_;
+  TickTiming& timing_;
+  std::int64_t start_ns_ = 0, tick_ = 0;
 };
 
 }  // namespace ehpt::hil

@@ -42,6 +42,7 @@
 #include "io/can/contract.hpp"
 #include "io/lcm/lcm_bus.hpp"
 #include "io/output_dir.hpp"
+#include "io/number_format.hpp"
 #include "io/process.hpp"
 
 namespace fs = std::filesystem;
@@ -99,6 +100,7 @@ const char* kMainHelp =
 
 const char* kRunHelp =
     "usage: ehpt run SCENARIO [--out DIR] [--set key=value ...] [--plot] [--quiet]\n"
+    "                [--realtime [--period T] [--cpu N] [--priority P]]\n"
     "\n"
     "SCENARIO is a .toml file, or a name from 'ehpt list' (e.g. ev_nedc).\n"
     "  --out DIR        output folder (default out/<scenario name>); written as\n"
@@ -114,6 +116,16 @@ const char* kRunHelp =
     "  --plot           draw the figures into DIR (as 'ehpt plot DIR'); a failed plot\n"
     "                   keeps the run and exits 1\n"
     "  --quiet          print nothing but errors\n"
+    "  --realtime       run in real time, the built-in ECU closing the loop (timing studies\n"
+    "                   without a bus): one tick per period on absolute CLOCK_MONOTONIC\n"
+    "                   deadlines, SCHED_FIFO, memory locked; rows go to a writer thread. A tick\n"
+    "                   that overruns skips the ticks it missed (counted, never caught up).\n"
+    "                   summary.json \"realtime\": overruns, wake-up latency p50/p99/p99.9/max,\n"
+    "                   compute and IO p50/p99/max. Without root it warns and runs SCHED_OTHER\n"
+    "  --period T       the tick: 1ms, 500us, 0.002s or 0.002 (seconds); a whole number of\n"
+    "                   solver steps (default: one step, solver.step_s)\n"
+    "  --cpu N          pin the real-time loop to CPU N\n"
+    "  --priority P     SCHED_FIFO priority 1..99 (default 80)\n"
     "\n"
     "Every problem in the scenario, vehicle, cycle or map files is listed as\n"
     "'file:line: field = value: expectation', and nothing runs (exit 2).\n";
@@ -121,6 +133,7 @@ const char* kRunHelp =
 const char* kPlantHelp =
     "usage: ehpt plant SCENARIO --bus SPEC [--lockstep] [--out DIR] [--set key=value ...]\n"
     "                  [--command-timeout-s T] [--lockstep-wait-s W] [--ecu-wait-s S] [--quiet]\n"
+    "                  [--realtime [--period T] [--cpu N] [--priority P]]\n"
     "\n"
     "Runs the scenario's plant without its built-in ECU: an ECU on the bus reads the sensor\n"
     "frames and sends the command frames of io/can/ehpt.dbc (one sample per ECU period,\n"
@@ -138,6 +151,8 @@ const char* kPlantHelp =
     "  --lockstep-wait-s W    lockstep: wall time to wait for a command before going on\n"
     "                   without one (it then ages towards the timeout); default 1\n"
     "  --ecu-wait-s S   wall time to wait for an ECU to connect before t = 0; default 60\n"
+    "  --realtime, --period, --cpu, --priority  the real-time loop, as for 'ehpt run' (instead\n"
+    "                   of the plain wall clock; not with --lockstep)\n"
     "  --out, --set, --quiet  as for 'ehpt run'\n"
     "A fault holds the run (reported in PlantStatus) and ends it with exit 3.\n";
 
@@ -270,12 +285,107 @@ int load(const std::string& name, const std::vector<std::string>& sets, ehpt::hi
   return 0;
 }
 
+// The real-time options of 'ehpt run' and 'ehpt plant'.
+struct RealtimeArgs {
+  bool realtime = false, tuned = false;  // tuned: --period, --cpu or --priority given
+  ehpt::hil::RealtimeOptions opt;
+};
+
+// A duration: "1ms", "500us", "2s" or plain seconds; (0, 10 s].
+bool parse_period(const std::string& text, double& seconds) {
+  std::string number = text;
+  double unit = 1.0;
+  for (const auto& [suffix, scale] : {std::pair<const char*, double>{"us", 1e-6}, {"ms", 1e-3}, {"s", 1.0}}) {
+    const std::string sfx = suffix;
+    if (number.size() > sfx.size() && number.compare(number.size() - sfx.size(), sfx.size(), sfx) == 0) {
+      number.resize(number.size() - sfx.size());
+      unit = scale;
+      break;
+    }
+  }
+  char* end = nullptr;
+  errno = 0;
+  const double v = std::strtod(number.c_str(), &end);
+  if (number.empty() || end == nullptr || *end != '\0' || errno != 0 || !std::isfinite(v) || v <= 0.0 ||
+      v * unit > 10.0 || v * unit < 1e-6) {
+    std::cerr << "--period " << text << ": must be a duration between 1us and 10s (1ms, 500us, 0.002s, 0.002)\n";
+    return false;
+  }
+  seconds = v * unit;
+  return true;
+}
+
+// A whole number in [lo, hi].
+bool parse_int(const std::string& option, const std::string& text, int lo, int hi, int& out) {
+  char* end = nullptr;
+  errno = 0;
+  const long v = std::strtol(text.c_str(), &end, 10);
+  if (text.empty() || end == nullptr || *end != '\0' || errno != 0 || v < lo || v > hi) {
+    std::cerr << option << " " << text << ": must be a whole number from " << lo << " to " << hi << "\n";
+    return false;
+  }
+  out = static_cast<int>(v);
+  return true;
+}
+
+// Consumes a real-time option at args[i] (and its value). kNotRealtime: not one of them;
+// 0: taken; 1: a missing or bad value (usage, as every option).
+constexpr int kNotRealtime = -1;
+int parse_realtime_arg(const std::vector<std::string>& args, std::size_t& i, RealtimeArgs& rt, const char* help) {
+  const std::string& o = args[i];
+  if (o == "--realtime") {
+    rt.realtime = true;
+    return 0;
+  }
+  if (o != "--period" && o != "--cpu" && o != "--priority") return kNotRealtime;
+  if (i + 1 >= args.size()) {
+    std::cerr << o << " needs a value\n" << help;
+    return 1;
+  }
+  rt.tuned = true;
+  const std::string& v = args[++i];
+  if (o == "--period") return parse_period(v, rt.opt.period_s) ? 0 : 1;
+  if (o == "--priority") return parse_int(o, v, 1, 99, rt.opt.priority) ? 0 : 1;
+  if (!parse_int(o, v, 0, 4095, rt.opt.cpu)) return 1;
+  std::string allowed;
+  if (!ehpt::hil::cpu_allowed(rt.opt.cpu, allowed)) {
+    std::cerr << "--cpu " << v << ": not a CPU this process may run on (" << allowed << ")\n";
+    return 1;
+  }
+  return 0;
+}
+
+// After loading: the period fits the scenario's step. 0 or the exit code.
+int check_realtime(const RealtimeArgs& rt, const ehpt::hil::Scenario& sc) {
+  if (!rt.realtime) {
+    if (rt.tuned) {
+      std::cerr << "--period, --cpu and --priority belong to --realtime\n";
+      return 1;
+    }
+    return 0;
+  }
+  if (rt.opt.period_s > 0.0) {
+    const double ratio = rt.opt.period_s / sc.solver.step_s;
+    if (std::abs(ratio - std::round(ratio)) > 1e-9 * ratio || std::round(ratio) < 1.0) {
+      std::cerr << "--period " << ehpt::io::number_text(rt.opt.period_s) << " s: must be a whole number of solver steps (solver.step_s = "
+                << ehpt::io::number_text(sc.solver.step_s) << " s)\n";
+      return 2;
+    }
+  }
+  return 0;
+}
+
 int cmd_run(const std::vector<std::string>& args) {
   if (wants_help(args)) return out(kRunHelp) ? 0 : 1;
   std::string scenario, out_dir;
   std::vector<std::string> sets;
   bool do_plot = false, quiet = false;
+  RealtimeArgs rt;
   for (std::size_t i = 0; i < args.size(); ++i) {
+    if (const int rc = parse_realtime_arg(args, i, rt, kRunHelp); rc != kNotRealtime) {
+      if (rc == 0) continue;
+      return rc;
+    }
     const std::string& a = args[i];
     if ((a == "--out" || a == "--set") && i + 1 >= args.size()) {
       std::cerr << a << " needs a value\n" << kRunHelp;
@@ -309,12 +419,14 @@ int cmd_run(const std::vector<std::string>& args) {
   }
   ehpt::hil::Scenario sc;
   if (const int rc = load(scenario, sets, sc); rc != 0) return rc;
+  if (const int rc = check_realtime(rt, sc); rc != 0) return rc;
   if (!quiet) {
     for (const auto& w : sc.warnings) std::cerr << "warning: " << w << "\n";
   }
   if (out_dir.empty()) out_dir = "out/" + sc.name;
 
   ehpt::hil::BatchOptions opt;
+  if (rt.realtime) opt.realtime = &rt.opt;
   opt.out_dir = out_dir;
   opt.progress = !quiet && isatty(STDERR_FILENO);
   opt.stop_signal = &g_stop;
@@ -361,11 +473,18 @@ struct BusArgs {
   bool lcm = false;
   std::string lcm_url;
   ehpt::io::can::BusSpec spec;
+  RealtimeArgs rt;
 };
 
 // 0: parsed; else the exit code.
 int parse_bus_args(const std::vector<std::string>& args, bool plant, const char* help, BusArgs& a) {
   for (std::size_t i = 0; i < args.size(); ++i) {
+    if (plant) {
+      if (const int rc = parse_realtime_arg(args, i, a.rt, help); rc != kNotRealtime) {
+        if (rc == 0) continue;
+        return rc;
+      }
+    }
     const std::string& o = args[i];
     const bool takes_value = o == "--bus" || o == "--set" || o == "--lcm-prefix" || (plant && (o == "--out" || o == "--command-timeout-s" ||
                                                                         o == "--lockstep-wait-s" || o == "--ecu-wait-s")) ||
@@ -443,13 +562,20 @@ int cmd_plant(const std::vector<std::string>& args) {
   if (wants_help(args)) return out(kPlantHelp) ? 0 : 1;
   BusArgs a;
   if (const int rc = parse_bus_args(args, true, kPlantHelp, a); rc != 0) return rc;
+  if (a.rt.realtime && a.lockstep) {
+    std::cerr << "--realtime and --lockstep: lockstep waits for the ECU at every sample and cannot keep a "
+                 "real-time period (use one or the other)\n";
+    return 1;
+  }
   ehpt::hil::Scenario sc;
   if (const int rc = load(a.scenario, a.sets, sc); rc != 0) return rc;
+  if (const int rc = check_realtime(a.rt, sc); rc != 0) return rc;
   if (!a.quiet) {
     for (const auto& w : sc.warnings) std::cerr << "warning: " << w << "\n";
   }
   ehpt::hil::BusPlantOptions bo;
   bo.lockstep = a.lockstep;
+  bo.realtime = a.rt.realtime;
   bo.command_timeout_s = a.command_timeout_s;
   bo.lockstep_wait_s = a.lockstep_wait_s;
   bo.peer_wait_s = a.ecu_wait_s;
@@ -481,14 +607,15 @@ int cmd_plant(const std::vector<std::string>& args) {
     driver = ehpt::hil::make_bus_plant(sc, *bus, bo, why);
   }
   if (!a.quiet) {
-    std::cerr << "plant " << sc.name << " on " << a.bus << (a.lockstep ? " (lockstep)" : " (wall clock)")
-              << "; waiting for an ECU\n";
+    std::cerr << "plant " << sc.name << " on " << a.bus
+              << (a.lockstep ? " (lockstep)" : a.rt.realtime ? " (real time)" : " (wall clock)") << "; waiting for an ECU\n";
   }
   ehpt::hil::BatchOptions opt;
   opt.out_dir = a.out_dir.empty() ? "out/" + sc.name : a.out_dir;
   opt.progress = !a.quiet && isatty(STDERR_FILENO);
   opt.stop_signal = &g_stop;
   opt.driver = driver.get();
+  if (a.rt.realtime) opt.realtime = &a.rt.opt;
   const ehpt::hil::BatchResult r = ehpt::hil::run_batch(sc, opt, std::cerr);
   if (!a.quiet) {
     for (const auto& w : r.warnings) std::cerr << "warning: " << w << "\n";

@@ -985,4 +985,123 @@ TEST(CliFaults, ChargingAboveSocMaxStopsTheRunWhenTheClosedFormSays) {
   EXPECT_LE(t_fault, t_full + 1e-3 + 1e-9);
 }
 
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string l; std::getline(in, l);) lines.push_back(l);
+  return lines;
+}
+
+// The real-time loop gives the batch run's trajectory bit for bit, with its timing figures;
+// a tick of two steps too; and no heap allocation after start-up in either.
+TEST(CliRealtime, TheRealTimeLoopGivesTheBatchTrajectoryBitForBit) {
+  const fs::path root = fresh("rt_identical");
+  const std::string sc = ehpt::test::source_path("scenarios/ev_sort1.toml");
+  const std::vector<std::string> short_run = {"--set", "solver.duration_s=1.5", "--set", "output.interval_s=0.001"};
+  const auto run = [&](const std::string& name, std::vector<std::string> extra) {
+    std::vector<std::string> args = {"run", sc, "--quiet", "--out", (root / name).string()};
+    args.insert(args.end(), short_run.begin(), short_run.end());
+    args.insert(args.end(), extra.begin(), extra.end());
+    const Result r = ehpt_argv(args);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return r;
+  };
+  run("batch", {});
+  run("rt", {"--realtime"});
+  run("rt2", {"--realtime", "--period", "2ms", "--priority", "50", "--cpu", "0"});
+  const std::string batch = slurp((root / "batch/timeseries.csv").string());
+  EXPECT_EQ(lines_of(batch).size(), 1502u);  // header + 1501 rows: every row went through the writer thread
+  EXPECT_EQ(slurp((root / "rt/timeseries.csv").string()), batch);
+  EXPECT_EQ(slurp((root / "rt2/timeseries.csv").string()), batch);
+  const std::string sb = slurp((root / "batch/summary.json").string());
+  const std::string s1 = slurp((root / "rt/summary.json").string());
+  const std::string s2 = slurp((root / "rt2/summary.json").string());
+  const std::regex hash("\"trajectory_hash\": \"([0-9a-f]{16})\"");
+  std::smatch mb, m1;
+  ASSERT_TRUE(std::regex_search(sb, mb, hash)) << sb;
+  ASSERT_TRUE(std::regex_search(s1, m1, hash)) << s1;
+  EXPECT_EQ(mb[1], m1[1]);
+  EXPECT_EQ(sb.find("\"realtime\": {"), std::string::npos);
+  EXPECT_EQ(json_number(s1, "ticks"), 1500);
+  EXPECT_EQ(json_number(s1, "steps_per_tick"), 1);
+  EXPECT_EQ(json_number(s2, "ticks"), 750);
+  EXPECT_EQ(json_number(s2, "steps_per_tick"), 2);
+  EXPECT_EQ(json_number(s2, "period_s"), 0.002);
+  EXPECT_HAS(s2, "\"cpu\": 0");
+  for (const std::string* s : {&s1, &s2}) {
+    EXPECT_EQ(json_number(*s, "heap_allocations_after_startup"), 0) << *s;
+    EXPECT_EQ(json_number(*s, "queue_rows_dropped"), 0);
+    EXPECT_GE(json_number(*s, "realtime_factor"), 0.9);  // paced: about 1, never thousands
+    EXPECT_LE(json_number(*s, "realtime_factor"), 1.1);
+    for (const char* key : {"wakeup_latency_us", "compute_us", "io_us"}) EXPECT_HAS(*s, std::string("\"") + key + "\": {");
+    EXPECT_GT(json_number(*s, "p50"), 0.0);  // the wake-up latency: never exactly zero on a real clock
+    EXPECT_LE(json_number(*s, "p50"), json_number(*s, "p99"));
+    EXPECT_LE(json_number(*s, "p99"), json_number(*s, "p99_9"));
+    EXPECT_TRUE(s->find("\"scheduler\": \"SCHED_FIFO\"") != std::string::npos ||
+                s->find("SCHED_FIFO priority") != std::string::npos)  // granted, or a warning with the reason
+        << *s;
+  }
+  EXPECT_EQ(json_number(sb, "heap_allocations_after_startup"), 0);
+}
+
+// Ctrl-C ends a real-time run at the next tick: exit 130, every row computed is written, the
+// rows are the batch run's, and the figures are in summary.json.
+TEST(CliRealtime, CtrlCEndsARealTimeRunWithEveryRowWritten) {
+  const fs::path root = fresh("rt_ctrl_c");
+  const std::string sc = ehpt::test::source_path("scenarios/ev_nedc.toml");
+  const std::string out = (root / "rt").string();
+  const pid_t pid = spawn_ehpt({"run", sc, "--quiet", "--realtime", "--out", out, "--set", "output.interval_s=0.01"}, "rt");
+  ASSERT_TRUE(wait_for(out + ".ehpt-lock"));
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  kill(pid, SIGINT);
+  const auto t0 = std::chrono::steady_clock::now();
+  const Result r = wait_ehpt(pid, "rt");
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0);
+  EXPECT_EQ(r.exit_code, 130) << r.err;
+  const std::string summary = slurp(out + "/summary.json");
+  EXPECT_HAS(summary, "\"status\": \"interrupted\"");
+  const double steps = json_number(summary, "steps");
+  EXPECT_GT(steps, 500);
+  EXPECT_LT(steps, 100000);
+  const std::vector<std::string> rt = lines_of(slurp(out + "/timeseries.csv"));
+  // header, a row every 10 steps from step 0, and the row of the state reached
+  const auto grid_rows = static_cast<std::size_t>(steps) / 10 + 1;
+  EXPECT_TRUE(rt.size() == 1 + grid_rows + 1 || rt.size() == 1 + grid_rows) << rt.size() << " " << steps;
+  ASSERT_EQ(ehpt_argv({"run", sc, "--quiet", "--out", (root / "batch").string(), "--set", "output.interval_s=0.01",
+                       "--set", "solver.duration_s=" + std::to_string(steps * 0.001 + 1)})
+                .exit_code,
+            0);
+  const std::vector<std::string> batch = lines_of(slurp((root / "batch/timeseries.csv").string()));
+  ASSERT_GT(batch.size(), grid_rows);
+  for (std::size_t i = 0; i < grid_rows + 1; ++i) ASSERT_EQ(rt[i], batch[i]) << "line " << i;
+}
+
+TEST(CliRealtime, BadRealTimeOptionsAreNamed) {
+  const std::string sc = ehpt::test::source_path("scenarios/ev_sort1.toml");
+  const fs::path root = fresh("rt_bad");
+  const std::string out = (root / "never").string();
+  const auto bad = [&](std::vector<std::string> extra, int code, const std::string& message) {
+    std::vector<std::string> args = {"run", sc, "--out", out};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const Result r = ehpt_argv(args);
+    EXPECT_EQ(r.exit_code, code) << r.err;
+    EXPECT_HAS(r.err, message);
+    EXPECT_FALSE(fs::exists(out));
+  };
+  bad({"--realtime", "--period", "1.5ms"}, 2, "--period 0.0015 s: must be a whole number of solver steps (solver.step_s = 0.001 s)");
+  bad({"--realtime", "--period", "abc"}, 1, "--period abc: must be a duration");
+  bad({"--realtime", "--period", "20s"}, 1, "--period 20s: must be a duration between 1us and 10s");
+  bad({"--realtime", "--period", "-1ms"}, 1, "--period -1ms");
+  bad({"--realtime", "--priority", "0"}, 1, "--priority 0: must be a whole number from 1 to 99");
+  bad({"--realtime", "--priority", "100"}, 1, "--priority 100");
+  bad({"--realtime", "--cpu", "4095"}, 1, "--cpu 4095: not a CPU this process may run on (");
+  bad({"--realtime", "--cpu", "-1"}, 1, "--cpu -1: must be a whole number");
+  bad({"--realtime", "--cpu"}, 1, "--cpu needs a value");
+  bad({"--period", "1ms"}, 1, "--period, --cpu and --priority belong to --realtime");
+  const Result r = ehpt_argv({"plant", sc, "--bus", "socketcand:127.0.0.1:1", "--lockstep", "--realtime", "--out", out});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_HAS(r.err, "--realtime and --lockstep");
+  EXPECT_FALSE(fs::exists(out));
+}
+
 }  // namespace
