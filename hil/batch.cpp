@@ -125,6 +125,16 @@ Streamed stream(Simulation& sim, const Scenario& sc, std::string text, std::size
   Streamed out;
   const auto wall_start = std::chrono::steady_clock::now();
   text.reserve(kCsvFlushBytes + kMaxNumberChars * columns + text.size());
+  // row by row into the text buffer of fixed size: written whenever it fills
+  const auto write_rows = [&] {
+    const auto rows = sim.rows();
+    for (std::size_t r = 0; r < rows.size(); r += columns) {
+      append_rows(text, rows.subspan(r, columns), columns, out.hash);
+      if (text.size() >= kCsvFlushBytes) write_text(csv, text, out.csv_error);
+    }
+    sim.clear_rows();
+    write_text(csv, text, out.csv_error);
+  };
   start_counting_allocations();
   for (;;) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -134,14 +144,7 @@ Streamed stream(Simulation& sim, const Scenario& sc, std::string text, std::size
       sim.run(opt.stop_signal);
     }
     out.run_wall_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    // row by row into a text buffer of fixed size (reserved below): written whenever it fills
-    const auto rows = sim.rows();
-    for (std::size_t r = 0; r < rows.size(); r += columns) {
-      append_rows(text, rows.subspan(r, columns), columns, out.hash);
-      if (text.size() >= kCsvFlushBytes) write_text(csv, text, out.csv_error);
-    }
-    sim.clear_rows();
-    write_text(csv, text, out.csv_error);
+    write_rows();
     if (out.csv_error.empty() && opt.driver != nullptr) opt.driver->flush(out.csv_error);
     if (opt.progress) {
       char buf[96];
@@ -153,6 +156,10 @@ Streamed stream(Simulation& sim, const Scenario& sc, std::string text, std::size
     if (sim.finished() || !out.csv_error.empty()) break;  // a write error ends the run: its rows are lost
     if (opt.stop_signal != nullptr && opt.stop_signal->load() != 0) {
       out.interrupted_by = opt.stop_signal->load();
+      if (opt.driver != nullptr) {  // the driver stopped between steps: the state it reached ends the record
+        sim.run(opt.stop_signal);
+        write_rows();
+      }
       break;
     }
   }

@@ -14,6 +14,7 @@ struct BusFamily;
 template <>
 struct BusFamily<msgs::PsdSensors> {
   using Command = msgs::PsdCommand;
+  static constexpr const char* kFamily = "psd";  // in inputs.log
   static constexpr const auto& kCanSensorIds = io::can::kPsdSensorIds;
   static constexpr const auto& kCanCommandIds = io::can::kPsdCommandIds;
   // references to zero; the engine's ON/OFF stays as it was: a stale message cannot switch it
@@ -28,6 +29,7 @@ struct BusFamily<msgs::PsdSensors> {
 template <>
 struct BusFamily<msgs::EvSensors> {
   using Command = msgs::EvCommand;
+  static constexpr const char* kFamily = "ev";
   static constexpr const auto& kCanSensorIds = io::can::kEvSensorIds;
   static constexpr const auto& kCanCommandIds = io::can::kEvCommandIds;
   static void make_safe(Command& c) { c.driveTauRef_Nm = 0.0; }

@@ -11,6 +11,7 @@
 #include "hil/bus_wire_lcm.hpp"
 #include "hil/histogram.hpp"
 #include "hil/pacer.hpp"
+#include "hil/session_log.hpp"
 #include "hil/simulation.hpp"
 #include "io/number_format.hpp"
 
@@ -37,9 +38,15 @@ class BusPlant final : public ExternalDriver {
         period_s_(sc.ecu_timing.period_s),
         timeout_s_(opt.command_timeout_s > 0.0 ? opt.command_timeout_s : 3.0 * sc.ecu_timing.period_s),
         timeout_steps_(static_cast<std::int64_t>(std::floor(timeout_s_ / sc.solver.step_s + 1e-9))),
-        pacer_(clock_, std::max<std::int64_t>(1, static_cast<std::int64_t>(sc.solver.step_s * 1e9))) {}
+        pacer_(clock_, std::max<std::int64_t>(1, static_cast<std::int64_t>(sc.solver.step_s * 1e9))) {
+    inputs_buf_.reserve(2 * kInputsFlushBytes);
+  }
 
-  bool open(const io::OutputDir& dir, std::string& error) override { return wire_.open(dir, error); }
+  bool open(const io::OutputDir& dir, std::string& error) override {
+    if (!wire_.open(dir, error) || !inputs_.open(dir.file(kInputsLogName), error)) return false;
+    inputs_buf_ = inputs_log_header(opt_.scenario_path, opt_.overrides, F::kFamily, pacing());
+    return true;
+  }
 
   void advance(Simulation& sim, std::int64_t max_steps, const std::atomic<int>* stop) override {
     if (!started_) {
@@ -96,7 +103,7 @@ class BusPlant final : public ExternalDriver {
     check_staleness(sim, n);
   }
 
-  bool flush(std::string& error) override { return wire_.flush(error); }
+  bool flush(std::string& error) override { return wire_.flush(error) && write_inputs(error); }
 
   void report(io::JsonObject& summary, std::string& text) const override {
     io::JsonObject b;
@@ -212,9 +219,32 @@ class BusPlant final : public ExternalDriver {
     return applied;
   }
 
+  // Every command the plant applies goes through here: to the plant and into inputs.log.
+  void write_command(Simulation& sim, std::int64_t n, const Command& c) {
+    sim.write_command(c);
+    char line[320];
+    const int k = format_command(line, sizeof line - 1, n, c);
+    if (k > 0 && static_cast<std::size_t>(k) < sizeof line - 1) {
+      line[k] = '\n';
+      inputs_buf_.append(line, static_cast<std::size_t>(k) + 1);
+    }
+    if (inputs_buf_.size() > kInputsFlushBytes) write_inputs(inputs_error_);
+  }
+  bool write_inputs(std::string& error) {
+    if (!inputs_error_.empty()) {  // failed before: inputs.log is incomplete, keep memory bounded
+      inputs_buf_.clear();
+      error = inputs_error_;
+      return false;
+    }
+    if (inputs_buf_.empty()) return true;
+    const bool ok = inputs_.write(inputs_buf_, error);
+    inputs_buf_.clear();
+    return ok;
+  }
+
   void apply_command(Simulation& sim, std::int64_t n, const Command& c) {
     applied_ = c;
-    sim.write_command(applied_);
+    write_command(sim, n, applied_);
     ++commands_applied_;
     command_since_sample_ = true;
     longest_gap_steps_ = std::max(longest_gap_steps_, n - last_command_step_);
@@ -238,10 +268,13 @@ class BusPlant final : public ExternalDriver {
     ++timeouts_;
     Command safe = applied_;
     F::make_safe(safe);
-    sim.write_command(safe);
+    write_command(sim, n, safe);
     wire_.resync();  // a restarted ECU starts its counters anew
   }
 
+  static constexpr std::size_t kInputsFlushBytes = 1 << 20;
+  io::TextFileWriter inputs_;
+  std::string inputs_buf_, inputs_error_;
   Wire wire_;
   BusPlantOptions opt_;
   double h_s_;

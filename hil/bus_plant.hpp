@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "hil/batch.hpp"
 #include "hil/config.hpp"
@@ -37,6 +38,9 @@ struct BusPlantOptions {
   double peer_wait_s = 60.0;  // wall time to wait for an ECU to connect before t = 0
   std::string log_interface = "can0";  // the interface name in bus.log lines
   std::string lcm_prefix = "EHPT_";    // LCM: channels <prefix>PLANT_STATUS, <prefix>ECU_COMMAND
+  // inputs.log's header (hil/session_log.hpp): what `ehpt replay` loads again
+  std::string scenario_path;
+  std::vector<std::string> overrides;
 };
 
 // False and a one-line reason if the scenario cannot run on the bus (a rig without bus

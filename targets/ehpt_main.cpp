@@ -37,6 +37,7 @@
 #include "hil/bus_plant.hpp"
 #include "hil/config.hpp"
 #include "hil/scenario.hpp"
+#include "hil/replay.hpp"
 #include "hil/simulation.hpp"
 #include "io/can/bus_spec.hpp"
 #include "io/can/contract.hpp"
@@ -44,6 +45,7 @@
 #include "io/output_dir.hpp"
 #include "io/number_format.hpp"
 #include "io/process.hpp"
+#include "io/text_file.hpp"
 
 namespace fs = std::filesystem;
 
@@ -92,6 +94,7 @@ const char* kMainHelp =
     "  plot DIR         draw PNG figures from a run's output folder (needs /usr/bin/python3 + matplotlib)\n"
     "  plant SCENARIO   run the scenario's plant on a CAN bus, its ECU outside (--bus)\n"
     "  ecu SCENARIO     run the scenario's built-in ECU as its own process on a CAN bus\n"
+    "  replay RUN_DIR   run a recorded 'ehpt plant' session again, offline, bit for bit\n"
     "\n"
     "'ehpt <command> --help' gives the options of a command.\n"
     "Exit codes: 0 ok, 1 usage, output or system error, 2 bad input (nothing run), 3 run-time\n"
@@ -167,6 +170,20 @@ const char* kEcuHelp =
     "  --bus SPEC       socketcan:IFACE, socketcand:HOST:PORT (connects to 'ehpt plant'), or\n"
     "                   lcm:URL (lcm:udpm://239.255.76.67:7667?ttl=0)\n"
     "  --lcm-prefix P   LCM channel prefix (default EHPT_)\n";
+
+const char* kReplayHelp =
+    "usage: ehpt replay RUN_DIR [--out DIR] [--quiet]\n"
+    "\n"
+    "Runs a recorded bus session again, offline and as fast as possible. Every 'ehpt plant'\n"
+    "session (wall clock, real time or lockstep) writes inputs.log into its output folder:\n"
+    "each command the plant applied, with the step it acted from. The replay loads the same\n"
+    "scenario with the same --set overrides, applies those commands at those steps and\n"
+    "writes timeseries.csv and summary.json like 'ehpt run'. It compares its trajectory_hash\n"
+    "with the session's summary.json: equal means bit for bit the same trajectory (exit 0);\n"
+    "a difference (the scenario's files changed since) is exit 1.\n"
+    "  RUN_DIR          the session's output folder (or its inputs.log)\n"
+    "  --out DIR        output folder (default out/<scenario name>_replay)\n"
+    "  --quiet          print nothing but errors\n";
 
 const char* kListHelp =
     "usage: ehpt list [--dir DIR]\n"
@@ -581,6 +598,9 @@ int cmd_plant(const std::vector<std::string>& args) {
   bo.peer_wait_s = a.ecu_wait_s;
   bo.log_interface = a.spec.interface_name;
   bo.lcm_prefix = a.lcm_prefix;
+  std::error_code path_ec;
+  bo.scenario_path = fs::absolute(sc.path, path_ec).string();
+  bo.overrides = a.sets;
   std::string error, why;
   if (!ehpt::hil::can_run_on_bus(sc, why)) {
     std::cerr << "error: " << why << "\n";
@@ -668,6 +688,112 @@ int cmd_ecu(const std::vector<std::string>& args) {
   return r.exit_code;
 }
 
+// "key": "text" or "key": number from a summary.json (flat keys, the first match); "" if absent.
+std::string summary_value(const std::string& json, const std::string& key) {
+  const std::string k = "\"" + key + "\": ";
+  const auto at = json.find(k);
+  if (at == std::string::npos) return "";
+  std::size_t b = at + k.size(), e = b;
+  if (b < json.size() && json[b] == '"') {
+    e = json.find('"', ++b);
+  } else {
+    while (e < json.size() && json[e] != ',' && json[e] != '\n' && json[e] != '}') ++e;
+  }
+  return e == std::string::npos ? "" : json.substr(b, e - b);
+}
+
+int cmd_replay(const std::vector<std::string>& args) {
+  if (wants_help(args)) return out(kReplayHelp) ? 0 : 1;
+  std::string source, out_dir;
+  bool quiet = false;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    if (args[i] == "--out") {
+      if (i + 1 >= args.size() || args[i + 1].empty()) {
+        std::cerr << "--out needs a folder name\n" << kReplayHelp;
+        return 1;
+      }
+      out_dir = args[++i];
+    } else if (args[i] == "--quiet") {
+      quiet = true;
+    } else if (!args[i].empty() && args[i][0] == '-') {
+      std::cerr << "unknown option " << args[i] << "\n" << kReplayHelp;
+      return 1;
+    } else if (source.empty()) {
+      source = args[i];
+    } else {
+      std::cerr << "one session per replay (got " << source << " and " << args[i] << ")\n";
+      return 1;
+    }
+  }
+  if (source.empty()) {
+    std::cerr << kReplayHelp;
+    return 1;
+  }
+  std::error_code ec;
+  const bool is_dir = fs::is_directory(source, ec);
+  const std::string log_path = is_dir ? source + "/" + ehpt::hil::kInputsLogName : source;
+  const std::string session_dir = is_dir ? source : fs::path(source).parent_path().string();
+  ehpt::hil::InputsLog log;
+  std::vector<std::string> problems;
+  if (!ehpt::hil::read_inputs_log(log_path, log, problems)) {
+    for (const auto& p : problems) std::cerr << p << "\n";
+    std::cerr << "nothing was run.\n";
+    return 2;
+  }
+  // the session's own summary: how far it ran (an interrupted session stopped early) and its hash
+  std::string session_summary, reason;
+  const std::string summary_path = (session_dir.empty() ? std::string(".") : session_dir) + "/summary.json";
+  if (!ehpt::io::read_text_file(summary_path, session_summary, reason)) {
+    std::cerr << summary_path << ": " << reason << " (a session that did not end cleanly cannot be compared)\n";
+    return 2;
+  }
+  const std::string recorded_hash = summary_value(session_summary, "trajectory_hash");
+  const std::string steps_text = summary_value(session_summary, "steps");
+  char* end = nullptr;
+  const long long recorded_steps = std::strtoll(steps_text.c_str(), &end, 10);
+  if (steps_text.empty() || *end != '\0' || recorded_steps < 0) {
+    std::cerr << summary_path << ": no \"steps\" count\n";
+    return 2;
+  }
+  std::vector<std::string> sets = log.overrides;
+  ehpt::hil::Scenario sc;
+  if (const int rc = load(log.scenario_path, sets, sc); rc != 0) return rc;
+  if (recorded_steps < sc.solver.steps) {  // it ran this far: so does the replay
+    sets.push_back("solver.duration_s=" + ehpt::io::number_text(static_cast<double>(recorded_steps) * sc.solver.step_s));
+    if (const int rc = load(log.scenario_path, sets, sc); rc != 0) return rc;
+  }
+  const bool psd = std::holds_alternative<ehpt::ecu::PsdEcuParams>(sc.ecu);
+  if ((psd ? "psd" : "ev") != log.family) {
+    std::cerr << log_path << ": its commands are of family '" << log.family << "' but " << log.scenario_path
+              << " is a" << (psd ? " hybrid ('psd')" : "n EV ('ev')") << "\n";
+    return 2;
+  }
+  const std::unique_ptr<ehpt::hil::ExternalDriver> driver = ehpt::hil::make_replay_driver(log, log_path);
+  ehpt::hil::BatchOptions opt;
+  opt.out_dir = out_dir.empty() ? "out/" + sc.name + "_replay" : out_dir;
+  opt.progress = !quiet && isatty(STDERR_FILENO);
+  opt.stop_signal = &g_stop;
+  opt.driver = driver.get();
+  const ehpt::hil::BatchResult r = ehpt::hil::run_batch(sc, opt, std::cerr);
+  const std::string hash = summary_value(r.summary.str(), "trajectory_hash");
+  const bool same = !recorded_hash.empty() && hash == recorded_hash;
+  if (!quiet) {
+    for (const auto& w : r.warnings) std::cerr << "warning: " << w << "\n";
+    std::string text = r.summary_text;
+    text += same ? "replay        bit-identical to the session in " + session_dir + " (trajectory_hash " + hash + ")\n"
+                 : "replay        DIFFERS from the session in " + session_dir + ": trajectory_hash " + hash +
+                       " here, " + (recorded_hash.empty() ? "none" : recorded_hash) + " there\n";
+    if (!r.results_dir.empty()) text += "outputs       " + r.results_dir + "/timeseries.csv, summary.json\n";
+    if (!out(text)) return 1;
+  }
+  if (r.exit_code != 0 && r.exit_code != 3) return r.exit_code;
+  if (!same) {
+    std::cerr << "error: the replay's trajectory differs from the session's (did the scenario's files change?)\n";
+    return 1;
+  }
+  return r.exit_code;
+}
+
 int cmd_list(const std::vector<std::string>& args) {
   if (wants_help(args)) return out(kListHelp) ? 0 : 1;
   std::string dir = ehpt::hil::scenarios_dir();
@@ -736,6 +862,7 @@ int dispatch(std::vector<std::string> args) {
   if (cmd == "plot") return cmd_plot(args);
   if (cmd == "plant") return cmd_plant(args);
   if (cmd == "ecu") return cmd_ecu(args);
+  if (cmd == "replay") return cmd_replay(args);
   std::cerr << "unknown command '" << cmd << "'\n\n" << kMainHelp;
   return 1;
 }

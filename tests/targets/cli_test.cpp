@@ -2,7 +2,10 @@
 // output folder; good runs are bit-identical; a run-time fault keeps its outputs.
 #include <gtest/gtest.h>
 
+#include <arpa/inet.h>
 #include <fcntl.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/resource.h>
@@ -1102,6 +1105,128 @@ TEST(CliRealtime, BadRealTimeOptionsAreNamed) {
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_HAS(r.err, "--realtime and --lockstep");
   EXPECT_FALSE(fs::exists(out));
+}
+
+// A TCP port on 127.0.0.1 that was free a moment ago (the plant listens there next).
+int free_port() {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  a.sin_port = 0;
+  socklen_t len = sizeof a;
+  if (fd < 0 || bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 ||
+      getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) != 0) {
+    ADD_FAILURE() << "no free port";
+  }
+  close(fd);
+  return ntohs(a.sin_port);
+}
+
+// One bus session: `ehpt plant` with extra options and `ehpt ecu` as its ECU over socketcand.
+Result bus_session(const std::string& scenario, const std::string& out, std::vector<std::string> plant_extra,
+                   const std::string& tag, int interrupt_after_ms = 0) {
+  const std::string bus = "socketcand:127.0.0.1:" + std::to_string(free_port());
+  std::vector<std::string> plant = {"plant", scenario, "--bus", bus, "--quiet", "--out", out};
+  plant.insert(plant.end(), plant_extra.begin(), plant_extra.end());
+  const pid_t p = spawn_ehpt(plant, tag + "_plant");
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // listening
+  std::vector<std::string> ecu = {"ecu", scenario, "--bus", bus, "--quiet"};
+  for (std::size_t i = 0; i + 1 < plant_extra.size(); ++i) {
+    if (plant_extra[i] == "--set") ecu.insert(ecu.end(), {"--set", plant_extra[i + 1]});
+  }
+  const pid_t e = spawn_ehpt(ecu, tag + "_ecu");
+  if (interrupt_after_ms > 0) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(interrupt_after_ms));
+    kill(p, SIGINT);
+  }
+  const Result r = wait_ehpt(p, tag + "_plant");
+  wait_ehpt(e, tag + "_ecu");
+  return r;
+}
+
+std::string hash_of(const std::string& summary) {
+  std::smatch m;
+  static const std::regex hash("\"trajectory_hash\": \"([0-9a-f]{16})\"");
+  return std::regex_search(summary, m, hash) ? m[1].str() : "";
+}
+
+// A wall-clock and a real-time session on the bus, each replayed offline: the same
+// trajectory bit for bit (hash and timeseries.csv); an interrupted session too.
+TEST(CliReplay, ARecordedSessionReplaysBitForBit) {
+  const fs::path root = fresh("replay");
+  struct Case {
+    const char* name;
+    std::string scenario;
+    std::vector<std::string> extra;
+    int interrupt_ms;
+  };
+  const std::vector<Case> cases = {
+      {"wall_psd", ehpt::test::source_path("scenarios/psecu2_nedc.toml"), {"--set", "solver.duration_s=3"}, 0},
+      {"rt_ev", ehpt::test::source_path("scenarios/ev_sort1.toml"), {"--realtime", "--set", "solver.duration_s=2"}, 0},
+      {"int_ev", ehpt::test::source_path("scenarios/ev_nedc.toml"), {"--set", "output.interval_s=0.01"}, 1500},
+  };
+  for (const Case& c : cases) {
+    const std::string session = (root / c.name).string();
+    const Result s = bus_session(c.scenario, session, c.extra, c.name, c.interrupt_ms);
+    ASSERT_EQ(s.exit_code, c.interrupt_ms > 0 ? 130 : 0) << c.name << s.err;
+    const std::string log = slurp(session + "/inputs.log");
+    EXPECT_HAS(log, "# ehpt inputs log 1\n# scenario " + c.scenario + "\n");
+    EXPECT_GT(lines_of(log).size(), 50u) << c.name;
+    const Result r = ehpt_argv({"replay", session, "--out", session + "_replay"});
+    EXPECT_EQ(r.exit_code, 0) << c.name << r.err << r.out;
+    EXPECT_HAS(r.out, "bit-identical to the session in " + session);
+    const std::string a = slurp(session + "/summary.json"), b = slurp(session + "_replay/summary.json");
+    EXPECT_EQ(hash_of(a), hash_of(b)) << c.name;
+    EXPECT_EQ(json_number(a, "steps"), json_number(b, "steps")) << c.name;
+    EXPECT_TRUE(slurp(session + "/timeseries.csv") == slurp(session + "_replay/timeseries.csv")) << c.name;
+    if (c.interrupt_ms > 0) {
+      EXPECT_LT(json_number(a, "steps"), 500000) << "interrupted early";
+    }
+  }
+  // the replay uses the commands: one torque changed in the log is a different trajectory (exit 1)
+  const std::string src = (root / "rt_ev").string(), tampered = (root / "tampered").string();
+  fs::create_directories(tampered);
+  fs::copy_file(src + "/summary.json", tampered + "/summary.json");
+  std::vector<std::string> lines = lines_of(slurp(src + "/inputs.log"));
+  std::string& line = lines[lines.size() / 2];
+  const auto last_space = line.rfind(' ');
+  line = line.substr(0, last_space) + " 12.5";
+  {
+    std::ofstream f(tampered + "/inputs.log");
+    for (const auto& l : lines) f << l << "\n";
+  }
+  const Result t = ehpt_argv({"replay", tampered, "--out", tampered + "_replay"});
+  EXPECT_EQ(t.exit_code, 1) << t.err;
+  EXPECT_HAS(t.out, "DIFFERS from the session");
+  EXPECT_HAS(t.err, "the replay's trajectory differs");
+}
+
+TEST(CliReplay, ABadLogIsNamedWithItsLineAndNothingRuns) {
+  const fs::path root = fresh("replay_bad");
+  const std::string dir = (root / "s").string();
+  fs::create_directories(dir);
+  std::ofstream(dir + "/summary.json") << "{\n  \"steps\": 100,\n  \"trajectory_hash\": \"0000000000000000\"\n}\n";
+  const std::string sc = ehpt::test::source_path("scenarios/ev_sort1.toml");
+  const auto bad = [&](const std::string& log, int code, const std::string& message) {
+    std::ofstream(dir + "/inputs.log") << log;
+    const Result r = ehpt_argv({"replay", dir, "--out", (root / "never").string()});
+    EXPECT_EQ(r.exit_code, code) << r.err;
+    EXPECT_HAS(r.err, message);
+    EXPECT_FALSE(fs::exists(root / "never"));
+  };
+  const std::string head = "# ehpt inputs log 1\n# scenario " + sc + "\n# family ev\n# pacing wall_clock\n";
+  bad(head + "ev 0 0 0 0 1.5\nev 10 1 10 0.01 nan\n", 2, dir + "/inputs.log:6: 'nan' is not a finite number");
+  bad(head + "ev 20 0 0 0 1.5\nev 10 1 10 0.01 2\n", 2, dir + "/inputs.log:6: step 10 before the previous command's 20");
+  bad(head + "ev 0 0 0 0\n", 2, dir + "/inputs.log:5: expected 6 fields");
+  bad(head + "psd 0 0 0 0 1 2 3 4 1\n", 2, "a command of family 'psd' (the log's family is 'ev')");
+  bad("hello\n", 2, "not an ehpt inputs log");
+  bad("# ehpt inputs log 1\n# scenario " + ehpt::test::source_path("scenarios/psecu2_nedc.toml") + "\n# family ev\n", 2,
+      "its commands are of family 'ev' but");
+  fs::remove(dir + "/inputs.log");
+  const Result r = ehpt_argv({"replay", dir});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_HAS(r.err, dir + "/inputs.log: ");
 }
 
 }  // namespace
