@@ -177,9 +177,9 @@ Streamed stream(Simulation& sim, const Scenario& sc, std::string text, std::size
 class RowWriter {
  public:
   RowWriter(RowQueue& queue, io::TextFileWriter& csv, std::string header, TrajectoryHash& hash, bool progress,
-            const Scenario& sc, const std::atomic<std::int64_t>& step, std::ostream& log)
+            const Scenario& sc, const std::atomic<std::int64_t>& step, std::ostream& log, ExternalDriver* driver)
       : queue_(queue), csv_(csv), text_(std::move(header)), hash_(hash), progress_(progress), sc_(sc), step_(step),
-        log_(log) {
+        log_(log), driver_(driver) {
     text_.reserve(kCsvFlushBytes + kMaxNumberChars * queue.columns() + text_.size());
   }
 
@@ -227,6 +227,7 @@ class RowWriter {
         if (text_.size() >= kCsvFlushBytes) write();
       });
       write();
+      if (driver_ != nullptr) driver_->background_flush();
       if (progress_) {
         timespec ts{};
         clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -261,6 +262,7 @@ class RowWriter {
   const Scenario& sc_;
   const std::atomic<std::int64_t>& step_;
   std::ostream& log_;
+  ExternalDriver* driver_;  // its files, written here (background_flush)
   pthread_t thread_{};
   bool started_ = false;
   std::atomic<bool> done_{false};
@@ -286,7 +288,7 @@ Streamed stream_realtime(Simulation& sim, const Scenario& sc, std::string header
   rt.queue_rows = std::clamp<std::size_t>(static_cast<std::size_t>(2.0 * rows_per_s) + 16, 64, max_rows);
   RowQueue queue(columns, rt.queue_rows);
   std::atomic<std::int64_t> step{0};
-  RowWriter writer(queue, csv, std::move(header), out.hash, opt.progress, sc, step, log);
+  RowWriter writer(queue, csv, std::move(header), out.hash, opt.progress, sc, step, log, opt.driver);
   const auto wall_start = std::chrono::steady_clock::now();
   if (!writer.start(out.csv_error)) return out;
   rt.setup = enter_realtime(rt.requested);

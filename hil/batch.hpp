@@ -38,6 +38,9 @@ class ExternalDriver {
   }
   virtual void start(Simulation&, const std::atomic<int>*) {}
   virtual void exchange(Simulation&) {}
+  // Called by the real-time loop's writer thread, concurrently with exchange(): the driver
+  // writes its files (bus.log) from buffers the loop handed over, so no file write blocks a tick.
+  virtual void background_flush() {}
   // Between chunks and at the end: the driver's own files (bus.log); false and error on failure.
   virtual bool flush(std::string& error) = 0;
   // The end: its figures, into summary.json ("bus") and onto the terminal.

@@ -13,6 +13,7 @@
 #include "hil/pacer.hpp"
 #include "hil/session_log.hpp"
 #include "hil/simulation.hpp"
+#include "io/handoff_buffer.hpp"
 #include "io/number_format.hpp"
 
 namespace ehpt::hil {
@@ -39,12 +40,12 @@ class BusPlant final : public ExternalDriver {
         timeout_s_(opt.command_timeout_s > 0.0 ? opt.command_timeout_s : 3.0 * sc.ecu_timing.period_s),
         timeout_steps_(static_cast<std::int64_t>(std::floor(timeout_s_ / sc.solver.step_s + 1e-9))),
         pacer_(clock_, std::max<std::int64_t>(1, static_cast<std::int64_t>(sc.solver.step_s * 1e9))) {
-    inputs_buf_.reserve(2 * kInputsFlushBytes);
+    wire_.set_background_writer(opt.realtime);
   }
 
   bool open(const io::OutputDir& dir, std::string& error) override {
     if (!wire_.open(dir, error) || !inputs_.open(dir.file(kInputsLogName), error)) return false;
-    inputs_buf_ = inputs_log_header(opt_.scenario_path, opt_.overrides, F::kFamily, pacing());
+    inputs_buf_.append(inputs_log_header(opt_.scenario_path, opt_.overrides, F::kFamily, pacing()));
     return true;
   }
 
@@ -103,7 +104,22 @@ class BusPlant final : public ExternalDriver {
     check_staleness(sim, n);
   }
 
-  bool flush(std::string& error) override { return wire_.flush(error) && write_inputs(error); }
+  bool flush(std::string& error) override {
+    const bool log_ok = wire_.flush(error);
+    inputs_buf_.take_all([&](std::string_view t) { write_inputs(t); });
+    if (inputs_error_.empty() && inputs_buf_.dropped_bytes() > 0) {
+      inputs_error_ = "inputs.log: " + std::to_string(inputs_buf_.dropped_bytes()) +
+                      " bytes dropped (the writer fell behind): the session cannot be replayed";
+    }
+    if (log_ok && !inputs_error_.empty()) error = inputs_error_;
+    return log_ok && inputs_error_.empty();
+  }
+
+  // The real-time loop's writer thread: what the loop handed over, written off the loop.
+  void background_flush() override {
+    wire_.background_flush();
+    inputs_buf_.take_handed([&](std::string_view t) { write_inputs(t); });
+  }
 
   void report(io::JsonObject& summary, std::string& text) const override {
     io::JsonObject b;
@@ -226,20 +242,15 @@ class BusPlant final : public ExternalDriver {
     const int k = format_command(line, sizeof line - 1, n, c);
     if (k > 0 && static_cast<std::size_t>(k) < sizeof line - 1) {
       line[k] = '\n';
-      inputs_buf_.append(line, static_cast<std::size_t>(k) + 1);
+      inputs_buf_.append(std::string_view(line, static_cast<std::size_t>(k) + 1));
     }
-    if (inputs_buf_.size() > kInputsFlushBytes) write_inputs(inputs_error_);
+    if (!opt_.realtime && inputs_buf_.wants_writer()) {
+      inputs_buf_.take_handed([&](std::string_view t) { write_inputs(t); });
+    }
   }
-  bool write_inputs(std::string& error) {
-    if (!inputs_error_.empty()) {  // failed before: inputs.log is incomplete, keep memory bounded
-      inputs_buf_.clear();
-      error = inputs_error_;
-      return false;
-    }
-    if (inputs_buf_.empty()) return true;
-    const bool ok = inputs_.write(inputs_buf_, error);
-    inputs_buf_.clear();
-    return ok;
+  // The loop or the writer thread (never both at once); after a failure nothing more.
+  void write_inputs(std::string_view text) {
+    if (inputs_error_.empty() && !text.empty()) inputs_.write(text, inputs_error_);
   }
 
   void apply_command(Simulation& sim, std::int64_t n, const Command& c) {
@@ -272,9 +283,9 @@ class BusPlant final : public ExternalDriver {
     wire_.resync();  // a restarted ECU starts its counters anew
   }
 
-  static constexpr std::size_t kInputsFlushBytes = 1 << 20;
   io::TextFileWriter inputs_;
-  std::string inputs_buf_, inputs_error_;
+  io::HandoffBuffer inputs_buf_{1 << 20};
+  std::string inputs_error_;
   Wire wire_;
   BusPlantOptions opt_;
   double h_s_;

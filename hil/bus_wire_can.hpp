@@ -13,6 +13,7 @@
 #include "io/can/candump_log.hpp"
 #include "io/can/codec.hpp"
 #include "io/can/transport.hpp"
+#include "io/handoff_buffer.hpp"
 #include "io/output_dir.hpp"
 #include "io/text_file.hpp"
 
@@ -26,9 +27,15 @@ class CanWire {
   using Command = typename F::Command;
 
   CanWire(io::can::Transport& bus, std::string log_interface)
-      : bus_(bus), log_interface_(std::move(log_interface)), filter_(F::kCanCommandIds) {
-    log_buf_.reserve(2 * kLogFlushBytes);
+      : bus_(bus), log_interface_(std::move(log_interface)), filter_(F::kCanCommandIds), log_buf_(kLogFlushBytes) {
+    line_.reserve(96 + log_interface_.size());  // one candump line: never more
   }
+
+  // The real-time loop: bus.log is written by its writer thread (background_flush), never by
+  // the loop; otherwise by the loop itself once 1 MB has gathered, and between chunks.
+  void set_background_writer(bool on) { background_ = on; }
+  // The writer thread: the buffer the loop handed over, if any.
+  void background_flush() { log_buf_.take_handed([&](std::string_view t) { write_log(t); }); }
 
   bool open(const io::OutputDir& dir, std::string& error) { return log_.open(dir.file("bus.log"), error); }
   bool has_peer() const { return bus_.has_peer(); }
@@ -81,13 +88,18 @@ class CanWire {
     received_mask_ = 0;
   }
 
-  // Between chunks: bus.log; false if a write failed (the log is then incomplete).
+  // Between chunks (and at the end, with no writer thread running): bus.log; false if a
+  // write failed or text was dropped (the log is then incomplete).
   bool flush(std::string& error) {
+    log_buf_.take_all([&](std::string_view t) { write_log(t); });
+    if (log_error_.empty() && log_buf_.dropped_bytes() > 0) {
+      log_error_ = "bus.log: " + std::to_string(log_buf_.dropped_bytes()) + " bytes dropped (the writer fell behind)";
+    }
     if (!log_error_.empty()) {
       error = log_error_;
       return false;
     }
-    return write_log(error);
+    return true;
   }
 
   // The wire's figures into summary.json's "bus"; rejected: their total.
@@ -125,24 +137,21 @@ class CanWire {
     clock_gettime(CLOCK_REALTIME, &ts);
     return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
   }
-  // Every frame in and out; written out once enough is buffered (also while a lockstep wait
-  // takes in a flood), so the buffer stays within its reserve. A failure is kept for flush().
+  // Every frame in and out; a full buffer is written out by the loop (also while a lockstep
+  // wait takes in a flood) or handed to the writer thread. A failure is kept for flush().
   void log_frames(std::span<const io::can::Frame> frames) {
     const double t = wall_time_s();
     for (const auto& f : frames) {
-      io::can::append_candump_line(log_buf_, t, log_interface_, f);
-      if (log_buf_.size() > kLogFlushBytes) write_log(log_error_);
+      line_.clear();
+      io::can::append_candump_line(line_, t, log_interface_, f);
+      log_buf_.append(line_);
+      if (!background_ && log_buf_.wants_writer()) background_flush();
     }
   }
-  bool write_log(std::string& error) {
-    if (!error.empty()) {  // failed before: bus.log is incomplete, keep memory bounded
-      log_buf_.clear();
-      return false;
-    }
-    if (log_buf_.empty()) return true;
-    const bool ok = log_.write(log_buf_, error);
-    log_buf_.clear();
-    return ok;
+  // Whoever writes (the loop or the writer thread, never both at once); after a failure
+  // nothing more is written: bus.log is incomplete and the error says so.
+  void write_log(std::string_view text) {
+    if (log_error_.empty() && !text.empty()) log_.write(text, log_error_);
   }
 
   io::can::Transport& bus_;
@@ -152,8 +161,10 @@ class CanWire {
   Command incoming_{};
   unsigned received_mask_ = 0;
   io::TextFileWriter log_;
-  std::string log_buf_;
-  std::string log_error_;  // the first failed write of bus.log within a chunk
+  io::HandoffBuffer log_buf_;
+  std::string line_;       // one candump line (reserved)
+  bool background_ = false;
+  std::string log_error_;  // the first failed write of bus.log (or the bytes dropped)
 };
 
 }  // namespace ehpt::hil

@@ -73,6 +73,8 @@ class LcmWire {
 
   void resync() { last_step_ = -1; }  // a restarted ECU's first command is taken as it is
   bool flush(std::string&) { return true; }
+  void set_background_writer(bool) {}  // no log of its own (lcm-logger records LCM)
+  void background_flush() {}
 
   void report(io::JsonObject& b, std::int64_t& rejected) const {
     b.integer("messages_in", bus_.counters().received);
