@@ -3,7 +3,8 @@
 //                         follower ECU and stepper.advance
 //   BM_BevRun/<solver>:   a whole NEDC run through the batch runner (outputs and metrics every
 //                         step, rows every 100); counters: ns_per_step, realtime_factor
-//   BM_Psecu2Step:        the paper's PSecu2 (NEDC, h = 1 ms): ECU update + one advance()
+//   BM_Psecu2Step:        the paper's PSecu2 (NEDC, h = 1 ms): ECU update + one advance();
+//                         RK4, and /maps/implicit-euler
 //   BM_Psecu2Run_nedc:    the whole 1400 s run through the runner with the ECU
 //   BM_OneFlangeStep:     one step of the TestMBOneFlange rig
 //   BM_EvRun_sort1/<vehicle>: a whole Sort1 run (150 s, RK4, h = 1 ms) of the map-based EV and
@@ -88,14 +89,15 @@ BENCHMARK(BM_BevRun<solvers::ImplicitEuler<plant::BevPlant>>)
 // the plant's sensing) + one advance(); and the whole 1400 s run through the runner.
 // /maps: the default (gen and mot on efficiency maps); /eta1: the example source's set-up
 // without drive losses, the workload these benchmarks measured before the maps were default.
-void BM_Psecu2Step(benchmark::State& state, const char* scenario) {
+template <class Integrator>
+void psecu2_step(benchmark::State& state, const char* scenario) {
   const hil::Scenario sc = load(scenario);
   const auto& p = std::get<plant::PsdParams>(sc.plant);
   const plant::PsdPlant plant(p);
   const auto& ecu_params = std::get<ecu::PsdEcuParams>(sc.ecu);
   ecu::PsdEcu ecu(ecu_params, 1e-3);
-  solvers::Rk4<plant::PsdPlant> rk4(plant);
-  solvers::EventStepper<plant::PsdPlant, solvers::Rk4<plant::PsdPlant>> stepper(plant, rk4, 0.0, 1e-3);
+  Integrator integrator(plant);
+  solvers::EventStepper<plant::PsdPlant, Integrator> stepper(plant, integrator, 0.0, 1e-3);
   plant::PsdPlant::State x = plant.initial_state();
   plant::PsdPlant::Modes m = plant.initial_modes(x);
   msgs::PsdSensors sensors;
@@ -115,8 +117,15 @@ void BM_Psecu2Step(benchmark::State& state, const char* scenario) {
   }
   set_step_counters(state, static_cast<double>(state.iterations()));
 }
+void BM_Psecu2Step(benchmark::State& state, const char* scenario) {
+  psecu2_step<solvers::Rk4<plant::PsdPlant>>(state, scenario);
+}
+void BM_Psecu2StepIE(benchmark::State& state, const char* scenario) {
+  psecu2_step<solvers::ImplicitEuler<plant::PsdPlant>>(state, scenario);
+}
 BENCHMARK_CAPTURE(BM_Psecu2Step, maps, "psecu2_nedc.toml");
 BENCHMARK_CAPTURE(BM_Psecu2Step, eta1, "psecu2_source_nedc.toml");
+BENCHMARK_CAPTURE(BM_Psecu2StepIE, maps, "psecu2_nedc.toml")->Name("BM_Psecu2Step/maps/implicit-euler");
 
 void BM_Psecu2Run_nedc(benchmark::State& state, const char* scenario) {
   const hil::Scenario sc = load(scenario);
