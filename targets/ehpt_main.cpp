@@ -762,6 +762,11 @@ int cmd_replay(const std::vector<std::string>& args) {
     sets.push_back("solver.duration_s=" + ehpt::io::number_text(static_cast<double>(recorded_steps) * sc.solver.step_s));
     if (const int rc = load(log.scenario_path, sets, sc); rc != 0) return rc;
   }
+  std::string why;
+  if (!ehpt::hil::can_run_on_bus(sc, why)) {  // a rig: no bus session can have been recorded on it
+    std::cerr << log_path << ": " << why << "\n";
+    return 2;
+  }
   const bool psd = std::holds_alternative<ehpt::ecu::PsdEcuParams>(sc.ecu);
   if ((psd ? "psd" : "ev") != log.family) {
     std::cerr << log_path << ": its commands are of family '" << log.family << "' but " << log.scenario_path

@@ -1223,6 +1223,8 @@ TEST(CliReplay, ABadLogIsNamedWithItsLineAndNothingRuns) {
   bad("hello\n", 2, "not an ehpt inputs log");
   bad("# ehpt inputs log 1\n# scenario " + ehpt::test::source_path("scenarios/psecu2_nedc.toml") + "\n# family ev\n", 2,
       "its commands are of family 'ev' but");
+  bad("# ehpt inputs log 1\n# scenario " + ehpt::test::source_path("scenarios/battery_cc_discharge.toml") + "\n# family ev\n", 2,
+      "has no bus messages");
   fs::remove(dir + "/inputs.log");
   const Result r = ehpt_argv({"replay", dir});
   EXPECT_EQ(r.exit_code, 2);
