@@ -1125,7 +1125,7 @@ int free_port() {
 
 // One bus session: `ehpt plant` with extra options and `ehpt ecu` as its ECU over socketcand.
 Result bus_session(const std::string& scenario, const std::string& out, std::vector<std::string> plant_extra,
-                   const std::string& tag, int interrupt_after_ms = 0) {
+                   const std::string& tag, int interrupt_after_ms = 0, std::vector<std::string> ecu_extra = {}) {
   const std::string bus = "socketcand:127.0.0.1:" + std::to_string(free_port());
   std::vector<std::string> plant = {"plant", scenario, "--bus", bus, "--quiet", "--out", out};
   plant.insert(plant.end(), plant_extra.begin(), plant_extra.end());
@@ -1135,6 +1135,7 @@ Result bus_session(const std::string& scenario, const std::string& out, std::vec
   for (std::size_t i = 0; i + 1 < plant_extra.size(); ++i) {
     if (plant_extra[i] == "--set") ecu.insert(ecu.end(), {"--set", plant_extra[i + 1]});
   }
+  ecu.insert(ecu.end(), ecu_extra.begin(), ecu_extra.end());
   const pid_t e = spawn_ehpt(ecu, tag + "_ecu");
   if (interrupt_after_ms > 0) {
     std::this_thread::sleep_for(std::chrono::milliseconds(interrupt_after_ms));
@@ -1160,15 +1161,19 @@ TEST(CliReplay, ARecordedSessionReplaysBitForBit) {
     std::string scenario;
     std::vector<std::string> extra;
     int interrupt_ms;
+    std::vector<std::string> ecu_extra = {};
   };
   const std::vector<Case> cases = {
       {"wall_psd", ehpt::test::source_path("scenarios/psecu2_nedc.toml"), {"--set", "solver.duration_s=3"}, 0},
       {"rt_ev", ehpt::test::source_path("scenarios/ev_sort1.toml"), {"--realtime", "--set", "solver.duration_s=2"}, 0},
       {"int_ev", ehpt::test::source_path("scenarios/ev_nedc.toml"), {"--set", "output.interval_s=0.01"}, 1500},
+      // the ECU stops answering after 120 samples: the safe state's commands are in the log too
+      {"timeout_psd", ehpt::test::source_path("scenarios/psecu2_nedc.toml"), {"--set", "solver.duration_s=3"}, 0,
+       {"--max-samples", "120"}},
   };
   for (const Case& c : cases) {
     const std::string session = (root / c.name).string();
-    const Result s = bus_session(c.scenario, session, c.extra, c.name, c.interrupt_ms);
+    const Result s = bus_session(c.scenario, session, c.extra, c.name, c.interrupt_ms, c.ecu_extra);
     ASSERT_EQ(s.exit_code, c.interrupt_ms > 0 ? 130 : 0) << c.name << s.err;
     const std::string log = slurp(session + "/inputs.log");
     EXPECT_HAS(log, "# ehpt inputs log 1\n# scenario " + c.scenario + "\n");
@@ -1182,6 +1187,10 @@ TEST(CliReplay, ARecordedSessionReplaysBitForBit) {
     EXPECT_TRUE(slurp(session + "/timeseries.csv") == slurp(session + "_replay/timeseries.csv")) << c.name;
     if (c.interrupt_ms > 0) {
       EXPECT_LT(json_number(a, "steps"), 500000) << "interrupted early";
+    }
+    if (!c.ecu_extra.empty()) {
+      EXPECT_GE(json_number(a, "timeouts"), 1) << a;  // the safe state was entered
+      EXPECT_GT(json_number(a, "safe_state_time_s"), 1.0) << a;
     }
   }
   // the replay uses the commands: one torque changed in the log is a different trajectory (exit 1)
