@@ -11,4 +11,11 @@ namespace ehpt::io {
 // 128 + N when it was killed by signal N, or -1 when it could not start (reason set).
 int run_program(const std::vector<std::string>& argv, std::string& reason);
 
+// Starts argv[0] (an absolute path) with argv and returns at once (the caller waits for it:
+// waitpid). stdin reads /dev/null; stdout and stderr go to the files named (created or
+// truncated; "" keeps ours). new_group: the child leads a process group of its own, so that
+// killpg(pid, ...) reaches it and whatever it starts. Returns the pid, or -1 (reason set).
+int start_program(const std::vector<std::string>& argv, const std::string& stdout_path,
+                  const std::string& stderr_path, bool new_group, std::string& reason);
+
 }  // namespace ehpt::io

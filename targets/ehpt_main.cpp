@@ -45,6 +45,7 @@
 #include "io/output_dir.hpp"
 #include "io/number_format.hpp"
 #include "io/process.hpp"
+#include "targets/bench.hpp"
 #include "io/text_file.hpp"
 
 namespace fs = std::filesystem;
@@ -94,6 +95,7 @@ const char* kMainHelp =
     "  plot DIR         draw PNG figures from a run's output folder (needs /usr/bin/python3 + matplotlib)\n"
     "  plant SCENARIO   run the scenario's plant on a CAN bus, its ECU outside (--bus)\n"
     "  ecu SCENARIO     run the scenario's built-in ECU as its own process on a CAN bus\n"
+    "  bench            the timing and determinism benchmark; a table and bench.json (--quick: < 1 min)\n"
     "  replay RUN_DIR   run a recorded 'ehpt plant' session again, offline, bit for bit\n"
     "\n"
     "'ehpt <command> --help' gives the options of a command.\n"
@@ -867,6 +869,7 @@ int dispatch(std::vector<std::string> args) {
   if (cmd == "plot") return cmd_plot(args);
   if (cmd == "plant") return cmd_plant(args);
   if (cmd == "ecu") return cmd_ecu(args);
+  if (cmd == "bench") return cmd_bench(args);
   if (cmd == "replay") return cmd_replay(args);
   std::cerr << "unknown command '" << cmd << "'\n\n" << kMainHelp;
   return 1;
