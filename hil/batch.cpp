@@ -407,6 +407,7 @@ io::JsonObject realtime_json(const RealtimeRun& rt) {
   if (rt.requested.cpu >= 0) j.integer("cpu", rt.requested.cpu);
   j.boolean("pinned", rt.setup.pinned);
   j.boolean("memory_locked", rt.setup.memory_locked);
+  j.boolean("cpu_dma_latency_zero", rt.setup.dma_latency_zero);
   j.integer("ticks", rt.timing.ticks);
   j.integer("overruns", rt.timing.overruns);
   j.integer("missed_ticks", rt.timing.missed_ticks);

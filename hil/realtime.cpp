@@ -5,6 +5,8 @@
 #include <sched.h>
 #include <sys/mman.h>
 #include <sys/resource.h>
+#include <fcntl.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
@@ -73,6 +75,16 @@ RealtimeSetup enter_realtime(const RealtimeOptions& opt) {
   }
   prefault_stack();
   prefault_heap();
+  // the PM QoS request lasts while the file stays open
+  s.dma_latency_fd = ::open("/dev/cpu_dma_latency", O_WRONLY | O_CLOEXEC);
+  const std::int32_t zero_us = 0;
+  if (s.dma_latency_fd >= 0 && ::write(s.dma_latency_fd, &zero_us, sizeof zero_us) == sizeof zero_us) {
+    s.dma_latency_zero = true;
+  } else {
+    s.warnings.push_back(reason("/dev/cpu_dma_latency (deep idle states stay allowed)", errno));
+    if (s.dma_latency_fd >= 0) ::close(s.dma_latency_fd);
+    s.dma_latency_fd = -1;
+  }
   sched_param sp{};
   sp.sched_priority = opt.priority;
   const int rc = pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp);
@@ -86,7 +98,11 @@ RealtimeSetup enter_realtime(const RealtimeOptions& opt) {
   return s;
 }
 
-void leave_realtime(const RealtimeSetup& setup) {
+void leave_realtime(RealtimeSetup& setup) {
+  if (setup.dma_latency_fd >= 0) {
+    ::close(setup.dma_latency_fd);
+    setup.dma_latency_fd = -1;
+  }
   if (setup.fifo) {
     sched_param sp{};
     sp.sched_priority = 0;

@@ -21,13 +21,18 @@ struct RealtimeSetup {
   bool fifo = false;           // SCHED_FIFO at the requested priority
   bool memory_locked = false;  // mlockall(MCL_CURRENT | MCL_FUTURE)
   bool pinned = false;         // on the requested CPU
+  // /dev/cpu_dma_latency held at 0 us while the loop runs (as cyclictest does): the CPU
+  // stays out of deep idle states, whose exit costs wake-up latency
+  bool dma_latency_zero = false;
+  int dma_latency_fd = -1;
   std::vector<std::string> warnings;
 };
 
 // Start-up, on the loop's thread: pins it, locks and prefaults memory, then SCHED_FIFO.
 RealtimeSetup enter_realtime(const RealtimeOptions& opt);
-// After the loop: back to SCHED_OTHER (the summary and the plots are not real-time work).
-void leave_realtime(const RealtimeSetup& setup);
+// After the loop: back to SCHED_OTHER (the summary and the plots are not real-time work),
+// the idle states released.
+void leave_realtime(RealtimeSetup& setup);
 
 // Whether cpu is one this process may run on; else false and the allowed ones ("0-1").
 bool cpu_allowed(int cpu, std::string& allowed);
