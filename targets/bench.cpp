@@ -1544,7 +1544,7 @@ std::string report_text(const Bench& b) {
     for (const auto& w : b.rt_warnings) s += "  warning (real-time set-up): " + w + "\n";
     if (!b.cyclictest.dma_latency.empty()) {
       s += "  note: cyclictest set /dev/cpu_dma_latency to " + b.cyclictest.dma_latency +
-           " while it ran (its default: no deep C-states); ehpt's loop does not\n";
+           " while it ran (no deep C-states); ehpt's loop does the same (summary.json realtime.cpu_dma_latency_zero)\n";
     }
   }
 
