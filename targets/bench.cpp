@@ -190,6 +190,8 @@ std::string find_program(const std::string& name) {
 
 // ---- a small JSON reader (the sub-runs' summary.json, an earlier bench.json) ------------
 
+struct JsonMember;
+
 struct Json {
   enum class Type { kNull, kBool, kNumber, kString, kArray, kObject };
   Type type = Type::kNull;
@@ -197,33 +199,47 @@ struct Json {
   double number = 0.0;
   std::string text;
   std::vector<Json> items;
-  std::vector<std::pair<std::string, Json>> members;
+  std::vector<JsonMember> members;  // (not std::pair: clang 14 with libstdc++ 12 cannot
+                                    // instantiate a pair of an incomplete Json)
 
-  const Json* get(std::string_view key) const {
-    for (const auto& [k, v] : members) {
-      if (k == key) return &v;
-    }
-    return nullptr;
-  }
+  const Json* get(std::string_view key) const;
   // a.b.c through nested objects
-  const Json* at(std::string_view path) const {
-    const Json* j = this;
-    while (j != nullptr && !path.empty()) {
-      const auto dot = path.find('.');
-      j = j->get(path.substr(0, dot));
-      path = dot == std::string_view::npos ? std::string_view() : path.substr(dot + 1);
-    }
-    return j;
-  }
-  double num(std::string_view path) const {
-    const Json* j = at(path);
-    return j != nullptr && j->type == Type::kNumber ? j->number : NAN;
-  }
-  std::string str(std::string_view path) const {
-    const Json* j = at(path);
-    return j != nullptr && j->type == Type::kString ? j->text : std::string();
-  }
+  const Json* at(std::string_view path) const;
+  double num(std::string_view path) const;
+  std::string str(std::string_view path) const;
 };
+
+struct JsonMember {
+  std::string key;
+  Json value;
+};
+
+const Json* Json::get(std::string_view key) const {
+  for (const auto& [k, v] : members) {
+    if (k == key) return &v;
+  }
+  return nullptr;
+}
+
+const Json* Json::at(std::string_view path) const {
+  const Json* j = this;
+  while (j != nullptr && !path.empty()) {
+    const auto dot = path.find('.');
+    j = j->get(path.substr(0, dot));
+    path = dot == std::string_view::npos ? std::string_view() : path.substr(dot + 1);
+  }
+  return j;
+}
+
+double Json::num(std::string_view path) const {
+  const Json* j = at(path);
+  return j != nullptr && j->type == Type::kNumber ? j->number : NAN;
+}
+
+std::string Json::str(std::string_view path) const {
+  const Json* j = at(path);
+  return j != nullptr && j->type == Type::kString ? j->text : std::string();
+}
 
 class JsonReader {
  public:
@@ -303,7 +319,7 @@ class JsonReader {
         ++i_;
         Json item;
         if (!value(item, depth + 1)) return false;
-        v.members.emplace_back(std::move(key), std::move(item));
+        v.members.push_back(JsonMember{std::move(key), std::move(item)});
         space();
         if (i_ < t_.size() && t_[i_] == ',') {
           ++i_;
