@@ -23,9 +23,21 @@ std::string scenarios_dir() {
 
 std::string resolve_scenario(const std::string& name, std::string& reason) {
   std::error_code ec;
+  // a bare name in the scenarios folder (a name with a slash is a path only)
+  const auto by_name = [&]() -> std::string {
+    if (name.find('/') != std::string::npos || name.empty()) return "";
+    const std::string dir = scenarios_dir();
+    for (const std::string& candidate : {dir + "/" + name, dir + "/" + name + ".toml"}) {
+      std::error_code e;
+      if (fs::is_regular_file(candidate, e)) return candidate;
+    }
+    return "";
+  };
   const fs::file_status st = fs::status(name, ec);
   if (fs::exists(st)) {
     if (fs::is_regular_file(st)) return name;
+    // a folder called like a scenario (its output folder: out/ev_nedc) does not hide the name
+    if (std::string found = by_name(); !found.empty()) return found;
     reason = "is " + io::describe_path(name) + ", not a scenario file";
     return "";
   }
@@ -33,13 +45,7 @@ std::string resolve_scenario(const std::string& name, std::string& reason) {
     reason = ec.message();
     return "";
   }
-  // a bare name: look in the scenarios folder (a name with a slash is a path only)
-  if (name.find('/') == std::string::npos && !name.empty()) {
-    const std::string dir = scenarios_dir();
-    for (const std::string& candidate : {dir + "/" + name, dir + "/" + name + ".toml"}) {
-      if (fs::is_regular_file(candidate, ec)) return candidate;
-    }
-  }
+  if (std::string found = by_name(); !found.empty()) return found;
   reason = "no such scenario file or name (see 'ehpt list')";
   return "";
 }

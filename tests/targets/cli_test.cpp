@@ -1240,4 +1240,23 @@ TEST(CliReplay, ABadLogIsNamedWithItsLineAndNothingRuns) {
   EXPECT_HAS(r.err, dir + "/inputs.log: ");
 }
 
+// A folder called like a scenario (its own output folder, after 'cd out') does not hide
+// the scenario's name; a folder that is no scenario's name is still refused as a folder.
+TEST(CliOutputs, AFolderNamedLikeAScenarioDoesNotHideIt) {
+  const fs::path root = fresh("shadow");
+  fs::create_directories(root / "ev_sort1");
+  fs::create_directories(root / "not_a_scenario");
+  const pid_t pid = spawn_ehpt({"run", "ev_sort1", "--quiet", "--out", (root / "run").string(), "--set",
+                                "solver.duration_s=1", "--set", "output.interval_s=0.5"},
+                               "shadow", -1, {}, root.string());
+  const Result r = wait_ehpt(pid, "shadow");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_HAS(slurp((root / "run/summary.json").string()), "\"scenario\": \"ev_sort1\"");
+  const pid_t pid2 = spawn_ehpt({"run", "not_a_scenario", "--quiet", "--out", (root / "run2").string()}, "shadow2", -1,
+                                {}, root.string());
+  const Result r2 = wait_ehpt(pid2, "shadow2");
+  EXPECT_EQ(r2.exit_code, 2);
+  EXPECT_HAS(r2.err, "not_a_scenario: is a folder, not a scenario file");
+}
+
 }  // namespace
