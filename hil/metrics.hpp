@@ -41,34 +41,41 @@ class Metrics {
   }
 
   // Run phase: the outputs at grid point n (called once per n, in order).
-  void observe(std::int64_t n, const Outputs& y) {
-    if (totals_.has_speed) {
-      const double err_kmh = 3.6 * (y.*src_.speed_ref_m_s - y.*src_.speed_m_s);
+  void observe(std::int64_t n, const Outputs& y) { observe_from(src_, n, y); }
+  // The same with the sources known at compile time (the runner passes Plant::kMetrics, the
+  // ones this was built with): the members are read directly, absent metrics cost nothing.
+  template <plant::MetricSources<Outputs> Src>
+  [[gnu::always_inline]] void observe(std::int64_t n, const Outputs& y) {
+    observe_from(Src, n, y);
+  }
+
+  // The times from the step counts when they are read, not at every grid point.
+  const MetricTotals& totals() const {
+    totals_.locked_time_s = static_cast<double>(locked_steps_) * h_s_;
+    totals_.engine_on_time_s = static_cast<double>(engine_on_steps_) * h_s_;
+    return totals_;
+  }
+
+ private:
+  [[gnu::always_inline]] void observe_from(const plant::MetricSources<Outputs>& src, std::int64_t n, const Outputs& y) {
+    if (src.speed_ref_m_s != nullptr && src.speed_m_s != nullptr) {
+      const double err_kmh = 3.6 * (y.*src.speed_ref_m_s - y.*src.speed_m_s);
       ++totals_.speed_samples;
       totals_.speed_error_sq_sum += err_kmh * err_kmh;
       totals_.speed_error_max_kmh = std::max(totals_.speed_error_max_kmh, std::abs(err_kmh));
     }
-    if (totals_.has_locked && n > 0 && y.*src_.locked != 0.0) {
-      ++locked_steps_;
-      totals_.locked_time_s = static_cast<double>(locked_steps_) * h_s_;
-    }
-    if (totals_.has_engine) {
-      const bool on = y.*src_.engine_on != 0.0;
-      if (n > 0 && engine_was_on_) {  // on during the step that ended here
-        ++engine_on_steps_;
-        totals_.engine_on_time_s = static_cast<double>(engine_on_steps_) * h_s_;
-      }
+    if (src.locked != nullptr && n > 0 && y.*src.locked != 0.0) ++locked_steps_;
+    if (src.engine_on != nullptr) {
+      const bool on = y.*src.engine_on != 0.0;
+      if (n > 0 && engine_was_on_) ++engine_on_steps_;  // on during the step that ended here
       if (on && (n == 0 || !engine_was_on_)) ++totals_.engine_starts;
       engine_was_on_ = on;
     }
   }
 
-  const MetricTotals& totals() const { return totals_; }
-
- private:
   plant::MetricSources<Outputs> src_;
   double h_s_;
-  MetricTotals totals_;
+  mutable MetricTotals totals_;
   std::int64_t locked_steps_ = 0, engine_on_steps_ = 0;
   bool engine_was_on_ = false;
 };

@@ -3,11 +3,15 @@
 // with its period and latency), advance() on the fixed grid t0 + n h, the outputs, and small
 // policies composed around it: Recorder (rows), Metrics (declared by the vehicle),
 // FaultPolicy (stop or hold) and a Pacer (as fast as possible; wall clock, lockstep and real
-// time plug in). Start-up sizes every buffer; run() allocates nothing, does no I/O and takes
+// time plug in). A plant with an observation (solvers/plant.hpp) gives, at the grid points
+// that are not recorded, only what the metrics and the fault policy read, with dx/dt and the
+// crossing functions for the next step; the full outputs are computed where they are recorded
+// or can be read (see observe()). Start-up sizes every buffer; run() allocates nothing, does no I/O and takes
 // no lock, so a target can call it in chunks and write the recorded rows between chunks
 // (progress and bounded memory on long runs). Every pacer gives the same trajectory.
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstdint>
@@ -98,7 +102,8 @@ class Runner {
         total_steps_(total_steps),
         chunk_steps_(chunk_steps),
         recorder_(plant.signals(), columns, decimation, chunk_steps),
-        metrics_(Plant::kMetrics, h_s) {
+        metrics_(Plant::kMetrics, h_s),
+        decimation_(decimation) {
     // commands in flight: one per ECU period of latency, and one more
     pending_.resize(static_cast<std::size_t>(latency_steps_ / std::max<std::int64_t>(1, controller_ratio_) + 2));
     x0_ = plant.initial_state();
@@ -120,19 +125,23 @@ class Runner {
                    std::int64_t max_steps = std::numeric_limits<std::int64_t>::max()) {
     const std::int64_t end = std::min(total_steps_, n_ + std::min(chunk_steps_, max_steps));
     const std::int64_t start = n_;
+    run_end_ = end;
     if (awaiting_command_) {  // the external ECU's command for this sample is in: the outputs at t_n
       awaiting_command_ = false;
       observe(n_);
     }
     while (n_ < end && !stopped_by_fault()) {
       if (stop != nullptr && stop->load(std::memory_order_relaxed) != 0) {
+        complete_outputs(n_);
         recorder_.record(n_, y_);  // an interrupted run still ends with the state it reached
         break;
       }
-      // dx/dt at t_n came with the outputs at t_n when nothing has moved since (same x, modes,
-      // inputs): the integrator's first stage, one evaluation saved, the same result
-      const solvers::StepReport r =
-          stepper_.advance(n_, x_, m_, inputs_, dx_observed_step_ == n_ ? &dx_observed_ : nullptr);
+      // dx/dt (and the crossing functions) at t_n came with the outputs at t_n when nothing has
+      // moved since (same x, modes, inputs): the integrator's first stage and the crossings at
+      // the step's start, evaluations saved, the same result
+      const bool observed = dx_observed_step_ == n_;
+      const solvers::StepReport r = stepper_.advance(n_, x_, m_, inputs_, observed ? &dx_observed_ : nullptr,
+                                                     observed && z_observed_ ? z_observed_values_.data() : nullptr);
       dx_observed_step_ = -1;
       stats_.events += r.events;
       stats_.chattering_steps += r.chattering ? 1 : 0;
@@ -191,7 +200,7 @@ class Runner {
 
   // Run phase: commands that are due apply; at a sample step the ECU reads the sensors at
   // t_n and computes its next command (applied now, or latency_steps later).
-  void tick_controller(std::int64_t n) {
+  [[gnu::always_inline]] void tick_controller(std::int64_t n) {
     if constexpr (!std::is_same_v<Controller, NoController>) {
       if (controller_ == nullptr) return;
       while (pending_count_ > 0 && pending_[pending_head_].apply_step <= n) {
@@ -199,7 +208,9 @@ class Runner {
         pending_head_ = (pending_head_ + 1) % pending_.size();
         --pending_count_;
       }
-      if (n % controller_ratio_ != 0) return;
+      // a sample every controller_ratio steps from step 0 (n % ratio == 0: n comes 0, 1, 2, ...)
+      if (n != next_sample_step_) return;
+      next_sample_step_ = n + controller_ratio_;
       const msgs::Stamp stamp{stepper_.time_s(n), n, sensor_sequence_++};
       sensors_.stamp = stamp;
       plant_.sense(stamp.time_s, x_, m_, inputs_, sensors_);
@@ -215,17 +226,33 @@ class Runner {
     }
   }
 
-  // Run phase: outputs at grid point n, metrics, the fault policy and the record.
-  void observe(std::int64_t n) {
+  // Run phase: outputs at grid point n, metrics, the fault policy and the record. The full
+  // outputs where they are recorded or can be read (row 0 and every decimation-th, the last
+  // step, a first fault, the last step of this run() call and the step before an external
+  // ECU's sample, after which run() returns); elsewhere the plant's observation (what the
+  // metrics and the fault policy read), when it has one. Either way y_ holds the full outputs
+  // at the last grid point observed whenever run() returns.
+  [[gnu::always_inline]] void observe(std::int64_t n) {
     const double t_s = stepper_.time_s(n);
-    if constexpr (solvers::PlantWithOutputDerivatives<Plant>) {
-      plant_.outputs(t_s, x_, m_, inputs_, y_, dx_observed_);
-      dx_observed_step_ = n;
+    // a row every decimation steps from step 0 (recorder_.due(n): n comes 0, 1, 2, ..., once each)
+    const bool row_due = n == next_row_step_;
+    if (row_due) next_row_step_ = n + decimation_;
+    if constexpr (solvers::PlantWithObservation<Plant>) {
+      const bool full = row_due || n == total_steps_ || n == run_end_ ||
+                        (external_ecu_ && (n + 1) % controller_ratio_ == 0);
+      if (!full) {
+        plant_.observe(t_s, x_, m_, inputs_, y_, dx_observed_, z_observed_values_.data());
+        dx_observed_step_ = n;
+        z_observed_ = true;
+        y_full_ = false;
+      } else {
+        rare_outputs_at(n);
+      }
     } else {
-      plant_.outputs(t_s, x_, m_, inputs_, y_);
+      outputs_at(n);
     }
     if (n == 0) y0_ = y_;
-    metrics_.observe(n, y_);
+    metrics_.template observe<Plant::kMetrics>(n, y_);
     const auto fault = static_cast<unsigned>(y_.fault);
     if (fault != 0) ++stats_.fault_steps;
     if (fault != 0 && stats_.fault == 0) {
@@ -233,8 +260,30 @@ class Runner {
       stats_.fault_time_s = t_s;
       stats_.fault_step = n;
       g_runs_with_fault.fetch_add(1, std::memory_order_relaxed);
+      complete_outputs(n);  // its row, and the outputs a stopped run ends with
     }
-    if (recorder_.due(n) || n == total_steps_ || (fault != 0 && stats_.fault_step == n)) recorder_.record(n, y_);
+    if (row_due || n == total_steps_ || (fault != 0 && stats_.fault_step == n)) recorder_.record(n, y_);
+  }
+
+  // Run phase: the full outputs at grid point n (and dx/dt there, if the plant gives it).
+  void outputs_at(std::int64_t n) {
+    const double t_s = stepper_.time_s(n);
+    if constexpr (solvers::PlantWithOutputDerivatives<Plant>) {
+      plant_.outputs(t_s, x_, m_, inputs_, y_, dx_observed_);
+      dx_observed_step_ = n;
+    } else {
+      plant_.outputs(t_s, x_, m_, inputs_, y_);
+    }
+    z_observed_ = false;
+    y_full_ = true;
+  }
+  // The same out of line, where a plant with an observation needs them (a recorded row, the end
+  // of a run() call): the step's loop stays small.
+  [[gnu::noinline]] void rare_outputs_at(std::int64_t n) { outputs_at(n); }
+  // Run phase: the full outputs at grid point n if only the observation was taken there (the
+  // same x, modes and inputs: nothing has moved since observe(n) in this run() call).
+  void complete_outputs(std::int64_t n) {
+    if (!y_full_) rare_outputs_at(n);
   }
 
   const Plant& plant_;
@@ -264,6 +313,13 @@ class Runner {
   Outputs y_{}, y0_{};
   State dx_observed_;                   // dx/dt with the outputs at step dx_observed_step_
   std::int64_t dx_observed_step_ = -1;  // -1: none that the next step may use
+  // the crossing functions there, when the plant's observation gave them (z_observed_)
+  std::array<double, (Plant::kNumCrossings > 0 ? Plant::kNumCrossings : 1)> z_observed_values_{};
+  bool z_observed_ = false;
+  bool y_full_ = true;             // y_ holds every output (not only the observation)
+  std::int64_t run_end_ = 0;       // the step the current run() call ends at
+  std::int64_t decimation_;        // the recorder's: a row every decimation steps
+  std::int64_t next_row_step_ = 0, next_sample_step_ = 0;  // the next row, the next ECU sample
   RunStats stats_;
 };
 

@@ -79,7 +79,8 @@ class BatteryRc {
       : c_(derive(params)),
         inv_c_batt_F_(1.0 / c_.c_batt_F),
         inv_c1_F_(1.0 / c_.c1_F),
-        inv_r1_Ohm_(1.0 / c_.r1_Ohm) {}
+        inv_r1_Ohm_(1.0 / c_.r1_Ohm),
+        four_r0_Ohm_(4.0 * c_.r0_Ohm) {}
   const BatteryRcConstants& constants() const { return c_; }
 
   // Run phase: pure functions.
@@ -110,12 +111,13 @@ class BatteryRc {
  private:
   BatteryRcConstants c_;
   double inv_c_batt_F_ = 0.0, inv_c1_F_ = 0.0, inv_r1_Ohm_ = 0.0;
+  double four_r0_Ohm_ = 0.0;  // 4 R0, the product terminal() used to form at every call
 };
 
 // Run phase, inline: the plant's derivative function calls it at every stage.
 [[gnu::always_inline]] inline BatteryTerminal BatteryRc::terminal(double emf_V, double v_rc_V, double load_power_W) const {
   const double v_int = emf_V - v_rc_V;
-  const double disc = v_int * v_int - 4.0 * c_.r0_Ohm * load_power_W;
+  const double disc = v_int * v_int - four_r0_Ohm_ * load_power_W;  // (4 R0) P, as before
   // beyond the maximum power point (disc < 0): hold at it and flag (the runner stops the run)
   const bool feasible = disc >= 0.0;
   const double voltage_V = 0.5 * (v_int + std::sqrt(feasible ? disc : 0.0));

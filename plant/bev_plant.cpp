@@ -195,7 +195,7 @@ void BevPlant::sense(double t_s, const State& x, const Modes& m, const Inputs& u
   s.batPowDel_W = e.battery.voltage_V * e.battery.current_A;
   s.battery_voltage_V = e.battery.voltage_V;
   s.battery_current_A = e.battery.current_A;
-  s.fault = battery_.faults(x[kEmf], e.battery) | (x.allFinite() ? 0u : kFaultNonFinite);
+  s.fault = battery_.faults(x[kEmf], e.battery) | (all_finite(x) ? 0u : kFaultNonFinite);
   s.locked = m.motion == Motion::kStuck;
 }
 
@@ -227,7 +227,7 @@ void BevPlant::sense(double t_s, const State& x, const Modes& m, const Inputs& u
   y.battery_emf_V = x[kEmf];
   y.soc = battery_.soc(x[kEmf]);
   y.locked = m.motion == Motion::kStuck ? 1.0 : 0.0;
-  y.fault = battery_.faults(x[kEmf], e.battery) | (x.allFinite() ? 0u : kFaultNonFinite);
+  y.fault = battery_.faults(x[kEmf], e.battery) | (all_finite(x) ? 0u : kFaultNonFinite);
   y.battery_out_J = x[kBatteryOutJ];
   y.road_work_J = x[kRoadJ];
   y.drive_loss_J = x[kDriveLossJ];
@@ -243,6 +243,20 @@ void BevPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs&
   const Eval e = evaluate(x, m, u);
   outputs_from(e, t_s, x, m, u, y);
   derivatives_from(e, x, dx);
+}
+
+// The same expressions as outputs_from(), derivatives_from() and crossings(), from one evaluation.
+void BevPlant::observe(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx,
+                       double* z) const {
+  const Eval e = evaluate(x, m, u);
+  y.speed_ref_m_s = p_.driver.cycle_m_s(t_s);
+  y.speed_m_s = x[kSpeed];
+  y.distance_m = x[kDistance];
+  y.soc = battery_.soc(x[kEmf]);
+  y.locked = m.motion == Motion::kStuck ? 1.0 : 0.0;
+  y.fault = battery_.faults(x[kEmf], e.battery) | (all_finite(x) ? 0u : kFaultNonFinite);
+  derivatives_from(e, x, dx);
+  crossings(t_s, x, m, u, z);
 }
 
 EnergyAudit BevPlant::audit(const State& x0, const State& x) const {

@@ -100,6 +100,11 @@ class BevPlant : public EvStateLayout {
   void outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx) const;
   // What the ECU reads at t_s (the stamp is the runner's).
   void sense(double t_s, const State& x, const Modes& m, const Inputs& u, Sensors& s) const;
+  // The runner's observation at a grid point it does not record (solvers/plant.hpp), from one
+  // evaluation: the outputs kMetrics names and fault (the other fields of y are left as they
+  // were), dx/dt and the crossing functions z, each bit for bit what outputs(), derivatives()
+  // and crossings() give at the same point.
+  void observe(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx, double* z) const;
 
   std::span<const Signal<Outputs>> signals() const { return kSignals; }
   // Energy audit between x0 and x (end of run; allocates).

@@ -211,6 +211,22 @@ class EvMachinePlant : public EvStateLayout {
     s.locked = m.motion == Motion::kStuck;
   }
 
+  // The runner's observation at a grid point it does not record (solvers/plant.hpp), from one
+  // evaluation: the outputs kMetrics names and fault (the other fields of y are left as they
+  // were), dx/dt and the crossing functions z, each bit for bit what outputs(), derivatives()
+  // and crossings() give at the same point.
+  void observe(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx, double* z) const {
+    const Eval e = evaluate(x, m, u);
+    y.speed_ref_m_s = p_.driver.cycle_m_s(t_s);
+    y.speed_m_s = x[kSpeed];
+    y.distance_m = x[kDistance];
+    y.soc = battery_.soc(x[kEmf]);
+    y.locked = m.motion == Motion::kStuck ? 1.0 : 0.0;
+    y.fault = faults(e, x);
+    derivatives_from(e, x, dx);
+    crossings(t_s, x, m, u, z);
+  }
+
   std::span<const Signal<Outputs>> signals() const { return kSignals; }
 
   // Energy audit between x0 and x (end of run; allocates).
@@ -270,7 +286,7 @@ class EvMachinePlant : public EvStateLayout {
   }
 
   unsigned faults(const Eval& e, const State& x) const {
-    return battery_.faults(x[kEmf], e.battery) | Drive::faults(e.drive) | (x.allFinite() ? 0u : kFaultNonFinite);
+    return battery_.faults(x[kEmf], e.battery) | Drive::faults(e.drive) | (all_finite(x) ? 0u : kFaultNonFinite);
   }
 
   [[gnu::always_inline]] void derivatives_from(const Eval& e, const State& x, State& dx) const {

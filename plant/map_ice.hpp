@@ -53,14 +53,14 @@ class MapIce {
   bool running(bool on_flag) const { return !p_.on_off || on_flag; }
   // Engine torque for the bus command (power or torque request per the engine's input);
   // dw/dt = a0 + a1 tau for the power loop. An engine that is off gives no torque.
-  double torque_Nm(bool on_flag, double power_ref_W, double torque_ref_Nm, double speed_rad_s, double a0,
-                   double a1) const {
+  [[gnu::always_inline]] double torque_Nm(bool on_flag, double power_ref_W, double torque_ref_Nm,
+                                          double speed_rad_s, double a0, double a1) const {
     if (!running(on_flag)) return 0.0;
     return p_.input == IceInput::kTorque ? torque_for_request_Nm(torque_ref_Nm, speed_rad_s)
                                          : torque_for_power_Nm(power_ref_W, speed_rad_s, a0, a1);
   }
   // Fuel mass flow; none while off.
-  double fuel_rate_kg_s(bool on_flag, double torque_Nm, double speed_rad_s) const {
+  [[gnu::always_inline]] double fuel_rate_kg_s(bool on_flag, double torque_Nm, double speed_rad_s) const {
     return running(on_flag) ? fuel_rate_kg_s(torque_Nm, speed_rad_s) : 0.0;
   }
   double torque_max_Nm(double speed_rad_s) const { return p_.torque_max_Nm(speed_rad_s); }
@@ -77,11 +77,11 @@ class MapIce {
     const double t_max = torque_max_Nm(speed_rad_s);
     return t < t_max ? t : t_max;
   }
-  double sfc_g_kWh(double torque_Nm, double speed_rad_s) const {
+  [[gnu::always_inline]] double sfc_g_kWh(double torque_Nm, double speed_rad_s) const {
     const double s = p_.sfc_g_kWh(torque_Nm, speed_rad_s);
     return s > 0.0 ? s : 0.0;
   }
-  double fuel_rate_kg_s(double torque_Nm, double speed_rad_s) const {
+  [[gnu::always_inline]] double fuel_rate_kg_s(double torque_Nm, double speed_rad_s) const {
     const double power_W = torque_Nm * speed_rad_s;
     return power_W > 0.0 ? sfc_g_kWh(torque_Nm, speed_rad_s) * power_W / 3.6e9 : 0.0;
   }

@@ -32,7 +32,7 @@ struct DriverOutput {
 };
 
 // Run phase: pure function.
-inline DriverOutput drive(const PropDriverParams& p, double t_s, double speed_m_s) {
+[[gnu::always_inline]] inline DriverOutput drive(const PropDriverParams& p, double t_s, double speed_m_s) {
   const double speed_ref_m_s = p.cycle_m_s(t_s);
   const double u = p.gain * (speed_ref_m_s - speed_m_s);
   const double request = u > p.request_max ? p.request_max : (u < p.request_min ? p.request_min : u);

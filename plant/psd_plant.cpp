@@ -77,6 +77,8 @@ PsdPlant::PsdPlant(const PsdParams& params)
   i11_ = m22_ / det;
   i12_ = -m12_ / det;
   i22_ = m11_ / det;
+  one_plus_rho_ = 1.0 + rho_;
+  i11_one_plus_rho_ = i11_ * one_plus_rho_;
 }
 
 PsdPlant::State PsdPlant::initial_state() const {
@@ -91,12 +93,13 @@ PsdPlant::Modes PsdPlant::initial_modes(const State& x0) const {
   return Modes{x0[kRingSpeed] > 0.0 ? Motion::kForward : Motion::kStuck};
 }
 
-// Run phase: no allocation.
-PsdPlant::Eval PsdPlant::evaluate(double t_s, const State& x, const Modes& m, const Inputs& u) const {
+// Run phase: no allocation. Always inlined: each caller computes only what it uses.
+[[gnu::always_inline]] inline PsdPlant::Eval PsdPlant::eval(double t_s, const State& x, const Modes& m,
+                                                            const Inputs& u) const {
   Eval e;
   const double w_c = x[kIceSpeed], w_r = x[kRingSpeed];
   e.speed_m_s = w_r * r_over_g_;
-  e.sun_speed_rad_s = (1.0 + rho_) * w_c - rho_ * w_r;
+  e.sun_speed_rad_s = one_plus_rho_ * w_c - rho_ * w_r;
   e.driver = drive(p_.driver, t_s, e.speed_m_s);
   // electric machines follow the bus within their limits
   e.gen = gen_.operate(u.genTauRef_Nm, e.sun_speed_rad_s);
@@ -113,13 +116,13 @@ PsdPlant::Eval PsdPlant::evaluate(double t_s, const State& x, const Modes& m, co
   double a0 = 0.0, a1 = 0.0, q2 = 0.0;
   if (m.motion == Motion::kStuck) {
     a1 = 1.0 / m11_;
-    a0 = (1.0 + rho_) * tau_g * a1;
+    a0 = one_plus_rho_ * tau_g * a1;
   } else {
     const double resist_N =
         VehicleBody::resisting_N(m.motion, f, e.brake_N);
     q2 = tau_m - rho_ * tau_g - r_over_g_ * resist_N;
     a1 = i11_;
-    a0 = i11_ * (1.0 + rho_) * tau_g + i12_ * q2;
+    a0 = i11_one_plus_rho_ * tau_g + i12_ * q2;
     e.road_N = m.motion == Motion::kForward ? e.rolling_N + e.speed_force_N : -e.rolling_N + e.speed_force_N;
   }
   e.ice_torque_Nm = ice_.torque_Nm(u.iceON, u.icePowRef_W, u.iceTauRef_Nm, w_c, a0, a1);
@@ -131,13 +134,17 @@ PsdPlant::Eval PsdPlant::evaluate(double t_s, const State& x, const Modes& m, co
     e.applied_N = g_over_r_ * (tau_m - rho_ * tau_g - m12_ * e.ice_accel_rad_s2) - e.grade_force_N;
     e.road_N = e.applied_N;
   } else {
-    const double q1 = e.ice_torque_Nm + (1.0 + rho_) * tau_g;
+    const double q1 = e.ice_torque_Nm + one_plus_rho_ * tau_g;
     e.ring_accel_rad_s2 = i12_ * q1 + i22_ * q2;
     e.applied_N = 0.0;
   }
   // gen and mot share the DC bus
   e.battery = battery_.terminal(x[kEmf], x[kVrc], e.gen.power_dc_W + e.mot.power_dc_W);
   return e;
+}
+
+PsdPlant::Eval PsdPlant::evaluate(double t_s, const State& x, const Modes& m, const Inputs& u) const {
+  return eval(t_s, x, m, u);
 }
 
 // Inlined into derivatives() (the RK4 stages) and outputs(): one evaluation, no copy of it.
@@ -157,14 +164,14 @@ PsdPlant::Eval PsdPlant::evaluate(double t_s, const State& x, const Modes& m, co
 }
 
 void PsdPlant::derivatives(double t_s, const State& x, const Modes& m, const Inputs& u, State& dx) const {
-  derivatives_from(evaluate(t_s, x, m, u), x, dx);
+  derivatives_from(eval(t_s, x, m, u), x, dx);
 }
 
 void PsdPlant::crossings(double t_s, const State& x, const Modes& m, const Inputs& u, double* z) const {
   if (m.motion != Motion::kStuck) {
     z[0] = VehicleBody::moving_crossing(m.motion, x[kRingSpeed]);
   } else {
-    const Eval e = evaluate(t_s, x, m, u);
+    const Eval e = eval(t_s, x, m, u);
     z[0] = VehicleBody::stuck_crossing(e.applied_N, e.rolling_N + e.brake_N);
   }
 }
@@ -172,17 +179,14 @@ void PsdPlant::crossings(double t_s, const State& x, const Modes& m, const Input
 void PsdPlant::on_crossing(int, double t_s, State& x, Modes& m, const Inputs& u) const {
   if (m.motion != Motion::kStuck) x[kRingSpeed] = 0.0;  // came to rest: exactly zero
   const Modes stuck{Motion::kStuck};
-  const Eval e = evaluate(t_s, x, stuck, u);
+  const Eval e = eval(t_s, x, stuck, u);
   m.motion = motion_at_rest(e.applied_N, e.rolling_N + e.brake_N);
 }
 
-void PsdPlant::sense(double t_s, const State& x, const Modes& m, const Inputs& u, Sensors& s) const {
-  sense_from(evaluate(t_s, x, m, u), x, m, s);
-}
-
-void PsdPlant::sense_from(const Eval& e, const State& x, const Modes& m, Sensors& bus) const {
+[[gnu::always_inline]] inline void PsdPlant::sense_from(const Eval& e, const State& x, const Modes& m,
+                                                        Sensors& bus) const {
   const double w_c = x[kIceSpeed], w_r = x[kRingSpeed];
-  const double sun_accel = (1.0 + rho_) * e.ice_accel_rad_s2 - rho_ * e.ring_accel_rad_s2;
+  const double sun_accel = one_plus_rho_ * e.ice_accel_rad_s2 - rho_ * e.ring_accel_rad_s2;
   bus.driverRequest = e.driver.request;
   bus.iceW_rad_s = w_c;
   bus.icePowDel_W = (e.ice_torque_Nm - p_.ice.inertia_kgm2 * e.ice_accel_rad_s2) * w_c;
@@ -205,8 +209,12 @@ void PsdPlant::sense_from(const Eval& e, const State& x, const Modes& m, Sensors
   bus.speed_m_s = e.speed_m_s;
   bus.battery_voltage_V = e.battery.voltage_V;
   bus.battery_current_A = e.battery.current_A;
-  bus.fault = battery_.faults(x[kEmf], e.battery) | (x.allFinite() ? 0u : kFaultNonFinite);
+  bus.fault = battery_.faults(x[kEmf], e.battery) | (all_finite(x) ? 0u : kFaultNonFinite);
   bus.locked = m.motion == Motion::kStuck;
+}
+
+void PsdPlant::sense(double t_s, const State& x, const Modes& m, const Inputs& u, Sensors& s) const {
+  sense_from(eval(t_s, x, m, u), x, m, s);
 }
 
 [[gnu::always_inline]] inline void PsdPlant::outputs_from(const Eval& e, double t_s, const State& x,
@@ -251,13 +259,30 @@ void PsdPlant::sense_from(const Eval& e, const State& x, const Modes& m, Sensors
 }
 
 void PsdPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const {
-  outputs_from(evaluate(t_s, x, m, u), t_s, x, m, u, y);
+  outputs_from(eval(t_s, x, m, u), t_s, x, m, u, y);
 }
 
 void PsdPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx) const {
-  const Eval e = evaluate(t_s, x, m, u);
+  const Eval e = eval(t_s, x, m, u);
   outputs_from(e, t_s, x, m, u, y);
   derivatives_from(e, x, dx);
+}
+
+// The same expressions as outputs_from(), derivatives_from() and crossings(), from one evaluation.
+void PsdPlant::observe(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx,
+                       double* z) const {
+  const Eval e = eval(t_s, x, m, u);
+  y.speed_ref_m_s = e.driver.speed_ref_m_s;
+  y.speed_m_s = e.speed_m_s;
+  y.distance_m = x[kDistance];
+  y.iceON = ice_.running(u.iceON) ? 1.0 : 0.0;
+  y.fuel_g = 1e3 * x[kFuelKg];
+  y.soc = battery_.soc(x[kEmf]);
+  y.locked = m.motion == Motion::kStuck ? 1.0 : 0.0;
+  y.fault = battery_.faults(x[kEmf], e.battery) | (all_finite(x) ? 0u : kFaultNonFinite);
+  derivatives_from(e, x, dx);
+  z[0] = m.motion != Motion::kStuck ? VehicleBody::moving_crossing(m.motion, x[kRingSpeed])
+                                    : VehicleBody::stuck_crossing(e.applied_N, e.rolling_N + e.brake_N);
 }
 
 double PsdPlant::kinetic_energy_J(const State& x) const {

@@ -128,6 +128,12 @@ class PsdPlant {
   void outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx) const;
   // What the ECU reads at t_s (the stamp is the runner's).
   void sense(double t_s, const State& x, const Modes& m, const Inputs& u, Sensors& s) const;
+  // The runner's observation at a grid point it does not record (solvers/plant.hpp), from one
+  // evaluation: the outputs kMetrics names and fault (the other fields of y are left as they
+  // were), dx/dt and the crossing functions z, each bit for bit what outputs(), derivatives()
+  // and crossings() give at the same point. The runner hands dx and z to the next step (its
+  // first stage, and the crossings at its start: two evaluations while stuck, one saved).
+  void observe(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx, double* z) const;
 
   EnergyAudit audit(const State& x0, const State& x) const;
   const PsdParams& params() const { return p_; }
@@ -137,9 +143,13 @@ class PsdPlant {
   }
 
   struct Eval;
+  // One evaluation (tests check the planetary balances on it); the plant's own functions use
+  // eval(), the same code always inlined, so that each computes only what it uses (the stuck
+  // crossing needs neither the driver, nor the fuel map, nor the battery).
   Eval evaluate(double t_s, const State& x, const Modes& m, const Inputs& u) const;
 
  private:
+  Eval eval(double t_s, const State& x, const Modes& m, const Inputs& u) const;
   double kinetic_energy_J(const State& x) const;
   void sense_from(const Eval& e, const State& x, const Modes& m, Sensors& s) const;
   void derivatives_from(const Eval& e, const State& x, State& dx) const;
@@ -154,6 +164,8 @@ class PsdPlant {
   double g_over_r_ = 0.0, r_over_g_ = 0.0;
   double m11_ = 0, m12_ = 0, m22_ = 0;             // mass matrix (symmetric)
   double i11_ = 0, i12_ = 0, i22_ = 0;             // its inverse
+  // products of parameters the evaluation used to form at every call (the same values)
+  double one_plus_rho_ = 0.0, i11_one_plus_rho_ = 0.0;  // 1 + rho, i11 (1 + rho)
 };
 
 // Everything one evaluation computes (public so tests can check the planetary balances).

@@ -122,7 +122,7 @@ class Table2d {
 
   // Run phase: no allocation. Unclamped fractions give linear extrapolation from the last
   // two grid lines.
-  double operator()(double a, double b) const {
+  [[gnu::always_inline]] double operator()(double a, double b) const {
     const AxisIndex::Position pa = index1_.locate(a);
     const AxisIndex::Position pb = index2_.locate(b);
     const double* r0 = v_.data() + pa.i * n2_ + pb.i;

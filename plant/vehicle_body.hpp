@@ -62,7 +62,7 @@ class VehicleBody {
       : road_(road, body.mass_kg), brake_gain_(plant::brake_gain_N_per_Nm(brake, body)) {}
 
   // Run phase: pure functions.
-  Forces forces(double speed_m_s, double distance_m) const {
+  [[gnu::always_inline]] Forces forces(double speed_m_s, double distance_m) const {
     const double grade_rad = road_.grade_rad(distance_m);
     return {grade_rad, road_.rolling_N(grade_rad), road_.speed_force_N(speed_m_s), road_.grade_force_N(grade_rad)};
   }

@@ -59,6 +59,21 @@ concept PlantWithOutputDerivatives =
       plant.outputs(t_s, x, m, u, y, dx);
     };
 
+// Optional: observe(t, x, modes, inputs, y, dx, z) gives, from one evaluation, what the runner
+// needs at a grid point it does not record: the fields of y that Plant::kMetrics names and
+// fault (the other fields are left as they were), dx/dt and the kNumCrossings crossing
+// functions z, each bit-identical to what outputs(), derivatives() and crossings() give at the
+// same point. The runner then computes the full outputs only for the rows it records and where
+// a caller can read them, and hands dx and z to the next step (its first stage, and the
+// crossings at its start).
+template <class P>
+concept PlantWithObservation =
+    PlantWithOutputDerivatives<P> && requires(const P& plant, double t_s, const typename P::State& x,
+                                              const typename P::Modes& m, const typename P::Inputs& u,
+                                              typename P::Outputs& y, typename P::State& dx, double* z) {
+      plant.observe(t_s, x, m, u, y, dx, z);
+    };
+
 template <class P>
 concept PlantWithSensors = RunnablePlant<P> && requires(const P& plant, double t_s, const typename P::State& x,
                                                 const typename P::Modes& m, const typename P::Inputs& u,

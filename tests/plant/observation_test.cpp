@@ -1,0 +1,201 @@
+// The plants' observation (solvers/plant.hpp, PlantWithObservation): at every grid point of
+// a whole cycle, with the built-in ECU closing the loop, observe() gives bit for bit what
+// outputs() gives on the fields the runner reads at every step (those kMetrics names and
+// fault), what derivatives() gives for dx/dt and what crossings() gives for z, and leaves
+// every other output as it was. The runner computes the full outputs only for recorded rows
+// and hands dx and z to the next step, so this is what keeps its trajectories unchanged.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <string>
+
+#include "ecu/ev_follower.hpp"
+#include "ecu/psd_ecu.hpp"
+#include "hil/runner.hpp"
+#include "plant/bev_plant.hpp"
+#include "plant/ev_machine_plant.hpp"
+#include "plant/psd_plant.hpp"
+#include "solvers/integrators.hpp"
+#include "test_plants.hpp"
+
+namespace ehpt::plant {
+namespace {
+
+static_assert(solvers::PlantWithObservation<BevPlant>);
+static_assert(solvers::PlantWithObservation<PsdPlant>);
+static_assert(solvers::PlantWithObservation<EvPmPlant>);
+static_assert(solvers::PlantWithObservation<EvAmPlant>);
+
+bool same_bits(double a, double b) { return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b); }
+
+// What the comparison met over a run.
+struct Seen {
+  std::int64_t points = 0, stuck = 0, moving = 0, engine_on = 0, mismatches = 0;
+};
+
+// Steps the plant one grid point at a time through the runner with its ECU (every observation
+// there is the full outputs) and compares observe() with outputs(), derivatives() and
+// crossings() at every point (t_n, x_n, modes_n, command_n): the point the runner observes.
+template <class Plant, class Ecu>
+Seen compare_over_run(const Plant& plant, Ecu& ecu, std::int64_t steps, std::int64_t ecu_ratio) {
+  using Outputs = typename Plant::Outputs;
+  using State = typename Plant::State;
+  constexpr int kZ = Plant::kNumCrossings;
+  hil::Runner<Plant, solvers::Rk4<Plant>, Ecu> runner(plant, 1e-3, steps, steps, {0}, 1, &ecu, ecu_ratio);
+  const auto& src = Plant::kMetrics;
+  // the fields observe() fills: those kMetrics names, and fault
+  std::vector<double Outputs::*> observed{&Outputs::fault};
+  for (double Outputs::*f : {src.speed_ref_m_s, src.speed_m_s, src.locked, src.engine_on, src.distance_m, src.soc,
+                             src.fuel_g}) {
+    if (f != nullptr) observed.push_back(f);
+  }
+  constexpr double kUntouched = -123456.789;
+  Seen seen;
+  for (;;) {
+    const double t = runner.time_s();
+    const State& x = runner.state();
+    const auto& m = runner.modes();
+    const auto& u = runner.command();
+    Outputs full{}, obs{};
+    for (const auto& s : plant.signals()) obs.*s.member = kUntouched;
+    State dx_full, dx_obs, dx_deriv;
+    double z_full[kZ], z_obs[kZ];
+    plant.outputs(t, x, m, u, full, dx_full);
+    plant.derivatives(t, x, m, u, dx_deriv);
+    plant.crossings(t, x, m, u, z_full);
+    plant.observe(t, x, m, u, obs, dx_obs, z_obs);
+    bool same = true;
+    for (const auto& s : plant.signals()) {
+      const bool is_observed = std::find(observed.begin(), observed.end(), s.member) != observed.end();
+      if (is_observed ? !same_bits(obs.*s.member, full.*s.member) : !same_bits(obs.*s.member, kUntouched)) {
+        ADD_FAILURE() << s.name << " at t = " << t << ": observe " << obs.*s.member << ", outputs "
+                      << full.*s.member << (is_observed ? "" : " (should be left as it was)");
+        same = false;
+      }
+    }
+    for (int i = 0; i < Plant::kNumStates; ++i) {
+      if (!same_bits(dx_obs[i], dx_full[i]) || !same_bits(dx_obs[i], dx_deriv[i])) {
+        ADD_FAILURE() << "dx[" << i << "] at t = " << t << ": observe " << dx_obs[i] << ", outputs " << dx_full[i]
+                      << ", derivatives " << dx_deriv[i];
+        same = false;
+      }
+    }
+    for (int i = 0; i < kZ; ++i) {
+      if (!same_bits(z_obs[i], z_full[i])) {
+        ADD_FAILURE() << "z[" << i << "] at t = " << t << ": observe " << z_obs[i] << ", crossings " << z_full[i];
+        same = false;
+      }
+    }
+    ++seen.points;
+    seen.stuck += full.locked != 0.0 ? 1 : 0;
+    seen.moving += full.locked == 0.0 ? 1 : 0;
+    if (src.engine_on != nullptr) seen.engine_on += full.*src.engine_on != 0.0 ? 1 : 0;
+    if (!same && ++seen.mismatches >= 5) break;  // enough to see what is wrong
+    if (runner.finished()) break;
+    runner.run();
+    runner.clear_rows();
+  }
+  return seen;
+}
+
+TEST(Observation, MapEvOnNedcEqualsTheOutputsAtEveryGridPoint) {
+  const hil::Scenario sc = test::load(test::source_path("scenarios/ev_nedc.toml"));
+  const BevPlant plant(std::get<BevParams>(sc.plant));
+  ecu::EvFollower follower;
+  const Seen seen = compare_over_run(plant, follower, sc.solver.steps, sc.solver.ecu_ratio);
+  EXPECT_EQ(seen.mismatches, 0);
+  EXPECT_EQ(seen.points, sc.solver.steps + 1);
+  EXPECT_GT(seen.stuck, 100000);  // standstills (the stuck crossing) and driving both met
+  EXPECT_GT(seen.moving, 500000);
+}
+
+TEST(Observation, Psecu2OnNedcEqualsTheOutputsAtEveryGridPoint) {
+  const hil::Scenario sc = test::load(test::source_path("scenarios/psecu2_nedc.toml"));
+  const PsdPlant plant(std::get<PsdParams>(sc.plant));
+  const auto& ecu_params = std::get<ecu::PsdEcuParams>(sc.ecu);
+  ecu::PsdEcu ecu(ecu_params, ecu_params.period_s);
+  const Seen seen = compare_over_run(plant, ecu, sc.solver.steps, sc.solver.ecu_ratio);
+  EXPECT_EQ(seen.mismatches, 0);
+  EXPECT_EQ(seen.points, sc.solver.steps + 1);
+  EXPECT_GT(seen.stuck, 100000);
+  EXPECT_GT(seen.moving, 500000);
+  EXPECT_GT(seen.engine_on, 100000);  // engine on and off both met
+  EXPECT_GT(seen.points - seen.engine_on, 100000);
+}
+
+TEST(Observation, EvPmOnNedcEqualsTheOutputsAtEveryGridPoint) {
+  const hil::Scenario sc = test::load(test::source_path("scenarios/evpm_nedc.toml"));
+  const EvPmPlant plant(std::get<EvPmParams>(sc.plant));
+  ecu::EvFollower follower;
+  const Seen seen = compare_over_run(plant, follower, sc.solver.steps, sc.solver.ecu_ratio);
+  EXPECT_EQ(seen.mismatches, 0);
+  EXPECT_EQ(seen.points, sc.solver.steps + 1);
+  EXPECT_GT(seen.stuck, 100000);
+  EXPECT_GT(seen.moving, 500000);
+}
+
+TEST(Observation, EvAmOnSort1EqualsTheOutputsAtEveryGridPoint) {
+  const hil::Scenario sc = test::load(test::source_path("scenarios/evam_sort1.toml"));
+  const EvAmPlant plant(std::get<EvAmParams>(sc.plant));
+  ecu::EvFollower follower;
+  const Seen seen = compare_over_run(plant, follower, sc.solver.steps, sc.solver.ecu_ratio);
+  EXPECT_EQ(seen.mismatches, 0);
+  EXPECT_EQ(seen.points, sc.solver.steps + 1);
+  EXPECT_GT(seen.stuck, 1000);
+  EXPECT_GT(seen.moving, 50000);
+}
+
+// The fault bits come from the observation at every step the runner does not record: a state
+// that is not finite, and a SOC outside its window, give the same bits as the outputs.
+TEST(Observation, FaultBitsEqualTheOutputs) {
+  const hil::Scenario sc = test::load(test::source_path("scenarios/psecu2_nedc.toml"));
+  PsdParams p = std::get<PsdParams>(sc.plant);
+  p.battery.soc_max = 0.59;  // starts at 0.6: outside the window
+  const PsdPlant plant(p);
+  PsdPlant::State x = plant.initial_state();
+  const PsdPlant::Modes m = plant.initial_modes(x);
+  const msgs::PsdCommand u{};
+  const double inf = std::numeric_limits<double>::infinity();
+  for (const double bad : {0.0, std::nan(""), inf, -inf}) {
+    x[PsdPlant::kFuelKg] = bad;  // a state no derivative reads: only the fault check sees it
+    PsdPlant::Outputs full, obs;
+    PsdPlant::State dx;
+    double z[PsdPlant::kNumCrossings];
+    plant.outputs(1.0, x, m, u, full);
+    plant.observe(1.0, x, m, u, obs, dx, z);
+    EXPECT_TRUE(same_bits(obs.fault, full.fault)) << bad;
+    const unsigned expected = kFaultSocWindow | (std::isfinite(bad) ? 0u : kFaultNonFinite);
+    EXPECT_EQ(static_cast<unsigned>(obs.fault), expected) << bad;
+  }
+}
+
+// Every position of an odd-sized vector and of the plants' states (vectorised sums).
+template <class Vector>
+void expect_all_finite_is_eigens(Vector x) {
+  const double values[] = {1.0, -2.0, 0.0, -0.0, 1e308, -1e308, 4.9e-324};
+  for (int i = 0; i < x.size(); ++i) x[i] = values[i % 7];
+  EXPECT_TRUE(all_finite(x));
+  const double inf = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < x.size(); ++i) {
+    for (const double bad : {std::nan(""), -std::nan(""), inf, -inf}) {
+      Vector y = x;
+      y[i] = bad;
+      EXPECT_EQ(all_finite(y), y.allFinite()) << i << " " << bad;
+      EXPECT_FALSE(all_finite(y)) << i << " " << bad;
+    }
+  }
+}
+
+TEST(Observation, AllFiniteIsEigensAllFinite) {
+  expect_all_finite_is_eigens(Eigen::Matrix<double, 7, 1>{});
+  expect_all_finite_is_eigens(PsdPlant::State{});
+  expect_all_finite_is_eigens(BevPlant::State{});
+}
+
+}  // namespace
+}  // namespace ehpt::plant
