@@ -7,8 +7,9 @@
 
 namespace ehpt::io {
 
-// Runs argv[0] (an absolute path) with argv, waits for it. Returns its exit status (0..255),
-// 128 + N when it was killed by signal N, or -1 when it could not start (reason set).
+// Runs argv[0] (an absolute path) with argv, waits for it (start_program with our stdout and
+// stderr, stdin from /dev/null). Returns its exit status (0..255), 128 + N when it was killed
+// by signal N, or -1 when it could not start (reason set).
 int run_program(const std::vector<std::string>& argv, std::string& reason);
 
 // Starts argv[0] (an absolute path) with argv and returns at once (the caller waits for it:
