@@ -249,11 +249,7 @@ void BevPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs&
 void BevPlant::observe(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx,
                        double* z) const {
   const Eval e = evaluate(x, m, u);
-  y.speed_ref_m_s = p_.driver.cycle_m_s(t_s);
-  y.speed_m_s = x[kSpeed];
-  y.distance_m = x[kDistance];
-  y.soc = battery_.soc(x[kEmf]);
-  y.locked = m.motion == Motion::kStuck ? 1.0 : 0.0;
+  ev_metric_outputs(p_.driver.cycle_m_s(t_s), x, battery_, m.motion, y);
   y.fault = battery_.faults(x[kEmf], e.battery) | (all_finite(x) ? 0u : kFaultNonFinite);
   derivatives_from(e, x, dx);
   crossings(t_s, x, m, u, z);

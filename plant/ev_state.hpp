@@ -32,6 +32,18 @@ struct EvStateLayout {
                                                           kBatteryLossJ};
 };
 
+// The outputs the runner's observation needs from an EV's state (solvers/plant.hpp
+// PlantWithObservation): the metrics' fields, the same expressions as each plant's outputs.
+template <class Outputs, class State>
+inline void ev_metric_outputs(double speed_ref_m_s, const State& x, const BatteryRc& battery, Motion motion,
+                              Outputs& y) {
+  y.speed_ref_m_s = speed_ref_m_s;
+  y.speed_m_s = x[EvStateLayout::kSpeed];
+  y.distance_m = x[EvStateLayout::kDistance];
+  y.soc = battery.soc(x[EvStateLayout::kEmf]);
+  y.locked = motion == Motion::kStuck ? 1.0 : 0.0;
+}
+
 // The balance above between the states x0 and x (kNumStates values each; end of run, allocates).
 // mass_eff_kg: vehicle + rotor reflected (kinetic energy); mass_kg: the vehicle (potential).
 EnergyAudit ev_energy_audit(const BatteryRc& battery, double mass_eff_kg, double mass_kg, const double* x0,
