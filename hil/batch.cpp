@@ -284,8 +284,9 @@ Streamed stream_realtime(Simulation& sim, const Scenario& sc, std::string header
   rt.requested.period_s = period_s;
   // about two seconds of rows, within 4 MB: the writer wakes every 2 ms
   const double rows_per_s = 1.0 / (sc.solver.step_s * static_cast<double>(sc.output.decimation));
-  const std::size_t max_rows = (4u << 20) / (8 * std::max<std::size_t>(columns, 1));
-  rt.queue_rows = std::clamp<std::size_t>(static_cast<std::size_t>(2.0 * rows_per_s) + 16, 64, max_rows);
+  // (clamped as a double before the cast: a tiny step makes rows_per_s too large for size_t)
+  const double max_rows = std::max(64.0, static_cast<double>((4u << 20) / (8 * std::max<std::size_t>(columns, 1))));
+  rt.queue_rows = static_cast<std::size_t>(std::clamp(2.0 * rows_per_s + 16.0, 64.0, max_rows));
   RowQueue queue(columns, rt.queue_rows);
   std::atomic<std::int64_t> step{0};
   RowWriter writer(queue, csv, std::move(header), out.hash, opt.progress, sc, step, log, opt.driver);
