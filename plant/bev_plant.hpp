@@ -91,6 +91,7 @@ class BevPlant : public EvStateLayout {
   Modes initial_modes(const State& x0) const;
 
   // Run phase: pure functions, no allocation.
+  // (defined below, inline: the integrators inline it into their stages)
   void derivatives(double t_s, const State& x, const Modes& m, const Inputs& u, State& dx) const;
   void crossings(double t_s, const State& x, const Modes& m, const Inputs& u, double* z) const;
   void on_crossing(int index, double t_s, State& x, Modes& m, const Inputs& u) const;
@@ -134,5 +135,83 @@ class BevPlant : public EvStateLayout {
   double inv_mass_eff_kg_ = 0.0;
   double brake_inertia_kg_ = 0.0;  // after_rotor_inertia: brake_gain * J * G/r (0 otherwise)
 };
+
+struct BevPlant::Eval {
+  DriveOperatingPoint drive;
+  BatteryTerminal battery;
+  double drive_speed_rad_s;
+  double grade_rad;
+  double rolling_N;      // Coulomb part (also the break-away force)
+  double speed_force_N;  // aero / viscous part, odd in v
+  double brake_N;        // magnitude
+  double applied_N;      // drive force minus grade force: what the road must hold while stuck ("sa" of §7.2)
+  double road_N;         // reaction of the road (rolling + speed part, or sa when stuck)
+  double accel_m_s2;
+};
+
+// Run phase: no allocation. Always inlined, so that each caller computes only what it uses. In the
+// header, with derivatives(), so that an integrator inlines every stage (solvers/integrators.hpp).
+[[gnu::always_inline]] inline BevPlant::Eval BevPlant::evaluate(const State& x, const Modes& m, const Inputs& u) const {
+  const double v = x[kSpeed];
+  // the drive follows the ECU's command, a shaft torque; the limiter may cut it
+  const double drive_speed_rad_s = v * g_over_r_;
+  const DriveOperatingPoint op = drive_.operate(u.driveTauRef_Nm, drive_speed_rad_s);
+  // forces at the wheel; the friction brake supplies the braking the drive could not
+  const VehicleBody::Forces f = body_.forces(v, x[kDistance]);
+  const double grade_rad = f.grade_rad, rolling_N = f.rolling_N, speed_force_N = f.speed_force_N;
+  const double unmet_braking_Nm = op.torque_Nm - u.driveTauRef_Nm;
+  double brake_N = body_.brake_N(unmet_braking_Nm);
+  const double tractive_N = op.torque_Nm * g_over_r_;
+  const double applied_N = tractive_N - f.grade_force_N;
+  // stuck: the road reacts with the applied force, no acceleration; moving: road load and
+  // brake oppose the motion (d = +1 forward, -1 backward)
+  double road_N = applied_N, accel_m_s2 = 0.0;
+  if (m.motion != Motion::kStuck) {
+    const double d = m.motion == Motion::kForward ? 1.0 : -1.0;
+    road_N = d * rolling_N + speed_force_N;
+    accel_m_s2 = (applied_N - road_N - d * brake_N) * inv_mass_eff_kg_;
+    if (brake_inertia_kg_ > 0.0) {
+      // MBEV's brake signal: max(0, unmet - J (G/r) a). Without the brake, a0 above; if the
+      // signal is positive there, the active branch m_eff a = F - d k (unmet - J (G/r) a) holds
+      const double gain = body_.brake_gain_N_per_Nm();
+      const double signal_N = gain * unmet_braking_Nm - brake_inertia_kg_ * ((applied_N - road_N) * inv_mass_eff_kg_);
+      if (signal_N > 0.0) {
+        accel_m_s2 = (applied_N - road_N - d * gain * unmet_braking_Nm) / (mass_eff_kg_ - d * brake_inertia_kg_);
+        brake_N = gain * unmet_braking_Nm - brake_inertia_kg_ * accel_m_s2;
+      } else {
+        brake_N = 0.0;
+        accel_m_s2 = (applied_N - road_N) * inv_mass_eff_kg_;
+      }
+    }
+  }
+  // the battery supplies the drive's DC power
+  return Eval{.drive = op,
+              .battery = battery_.terminal(x[kEmf], x[kVrc], op.power_dc_W),
+              .drive_speed_rad_s = drive_speed_rad_s,
+              .grade_rad = grade_rad,
+              .rolling_N = rolling_N,
+              .speed_force_N = speed_force_N,
+              .brake_N = brake_N,
+              .applied_N = applied_N,
+              .road_N = road_N,
+              .accel_m_s2 = accel_m_s2};
+}
+
+// Inlined into derivatives() (the RK4 stages) and outputs(): one evaluation, no copy of it.
+[[gnu::always_inline]] inline void BevPlant::derivatives_from(const Eval& e, const State& x, State& dx) const {
+  const double v = x[kSpeed];
+  dx[kSpeed] = e.accel_m_s2;
+  body_.derivatives(v, {e.grade_rad, e.rolling_N, e.speed_force_N, 0.0}, e.brake_N, dx.data() + kBodyAt);
+  dx[kEmf] = battery_.demf_dt(e.battery);
+  dx[kVrc] = battery_.dvrc_dt(e.battery, x[kVrc]);
+  // energy integrals for the audit (all zero while stuck because v = 0)
+  dx[kBatteryOutJ] = e.battery.voltage_V * e.battery.current_A;
+  dx[kDriveLossJ] = e.drive.power_dc_W - e.drive.power_mech_W;
+  dx[kBatteryLossJ] = e.battery.loss_W;
+}
+
+[[gnu::always_inline]] inline void BevPlant::derivatives(double, const State& x, const Modes& m, const Inputs& u, State& dx) const {
+  derivatives_from(evaluate(x, m, u), x, dx);
+}
 
 }  // namespace ehpt::plant

@@ -63,14 +63,14 @@ class MapIce {
   [[gnu::always_inline]] double fuel_rate_kg_s(bool on_flag, double torque_Nm, double speed_rad_s) const {
     return running(on_flag) ? fuel_rate_kg_s(torque_Nm, speed_rad_s) : 0.0;
   }
-  double torque_max_Nm(double speed_rad_s) const { return p_.torque_max_Nm(speed_rad_s); }
-  double torque_for_request_Nm(double torque_ref_Nm, double speed_rad_s) const {
+  [[gnu::always_inline]] double torque_max_Nm(double speed_rad_s) const { return p_.torque_max_Nm(speed_rad_s); }
+  [[gnu::always_inline]] double torque_for_request_Nm(double torque_ref_Nm, double speed_rad_s) const {
     const double t = torque_ref_Nm > 0.0 ? torque_ref_Nm : 0.0;
     const double t_max = torque_max_Nm(speed_rad_s);
     return t < t_max ? t : t_max;
   }
   // Power loop with the algebraic loop solved; dw/dt = a0 + a1 tau.
-  double torque_for_power_Nm(double power_ref_W, double speed_rad_s, double a0, double a1) const {
+  [[gnu::always_inline]] double torque_for_power_Nm(double power_ref_W, double speed_rad_s, double a0, double a1) const {
     const double k = p_.control_gain_Nm_W, j = p_.inertia_kgm2;
     const double t = k * (power_ref_W + j * speed_rad_s * a0) / (1.0 + k * speed_rad_s * (1.0 - j * a1));
     if (!(t > 0.0)) return 0.0;

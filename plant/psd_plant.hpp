@@ -119,6 +119,7 @@ class PsdPlant {
   Modes initial_modes(const State& x0) const;
 
   // Run phase: pure functions, no allocation.
+  // (defined below, inline: the integrators inline it into their stages)
   void derivatives(double t_s, const State& x, const Modes& m, const Inputs& u, State& dx) const;
   void crossings(double t_s, const State& x, const Modes& m, const Inputs& u, double* z) const;
   void on_crossing(int index, double t_s, State& x, Modes& m, const Inputs& u) const;
@@ -181,5 +182,76 @@ struct PsdPlant::Eval {
   double applied_N;  // stuck: force the road must hold (sa); moving: unused
   double road_N;     // reaction of the road: road load when moving, sa when stuck
 };
+
+// Run phase: no allocation. Always inlined: each caller computes only what it uses. In the
+// header, with derivatives(), so that an integrator inlines every stage (solvers/integrators.hpp).
+[[gnu::always_inline]] inline PsdPlant::Eval PsdPlant::eval(double t_s, const State& x, const Modes& m,
+                                                            const Inputs& u) const {
+  Eval e;
+  const double w_c = x[kIceSpeed], w_r = x[kRingSpeed];
+  e.speed_m_s = w_r * r_over_g_;
+  e.sun_speed_rad_s = one_plus_rho_ * w_c - rho_ * w_r;
+  e.driver = drive(p_.driver, t_s, e.speed_m_s);
+  // electric machines follow the bus within their limits
+  e.gen = gen_.operate(u.genTauRef_Nm, e.sun_speed_rad_s);
+  e.mot = mot_.operate(u.motTauRef_Nm, w_r);
+  const double tau_g = e.gen.torque_Nm, tau_m = e.mot.torque_Nm;
+  // road, grade and the friction brake that supplies what mot could not brake
+  const VehicleBody::Forces f = body_.forces(e.speed_m_s, x[kDistance]);
+  e.grade_rad = f.grade_rad;
+  e.rolling_N = f.rolling_N;
+  e.speed_force_N = f.speed_force_N;
+  e.grade_force_N = f.grade_force_N;
+  e.brake_N = body_.brake_N(tau_m - u.motTauRef_Nm);
+  // engine torque from the power loop, with dw_c/dt = a0 + a1 tau_ice
+  double a0 = 0.0, a1 = 0.0, q2 = 0.0;
+  if (m.motion == Motion::kStuck) {
+    a1 = 1.0 / m11_;
+    a0 = one_plus_rho_ * tau_g * a1;
+  } else {
+    const double resist_N =
+        VehicleBody::resisting_N(m.motion, f, e.brake_N);
+    q2 = tau_m - rho_ * tau_g - r_over_g_ * resist_N;
+    a1 = i11_;
+    a0 = i11_one_plus_rho_ * tau_g + i12_ * q2;
+    e.road_N = m.motion == Motion::kForward ? e.rolling_N + e.speed_force_N : -e.rolling_N + e.speed_force_N;
+  }
+  e.ice_torque_Nm = ice_.torque_Nm(u.iceON, u.icePowRef_W, u.iceTauRef_Nm, w_c, a0, a1);
+  e.fuel_rate_kg_s = ice_.fuel_rate_kg_s(u.iceON, e.ice_torque_Nm, w_c);
+  e.ice_accel_rad_s2 = a0 + a1 * e.ice_torque_Nm;
+  if (m.motion == Motion::kStuck) {
+    // the ring is held: the road reacts with what the shafts push
+    e.ring_accel_rad_s2 = 0.0;
+    e.applied_N = g_over_r_ * (tau_m - rho_ * tau_g - m12_ * e.ice_accel_rad_s2) - e.grade_force_N;
+    e.road_N = e.applied_N;
+  } else {
+    const double q1 = e.ice_torque_Nm + one_plus_rho_ * tau_g;
+    e.ring_accel_rad_s2 = i12_ * q1 + i22_ * q2;
+    e.applied_N = 0.0;
+  }
+  // gen and mot share the DC bus
+  e.battery = battery_.terminal(x[kEmf], x[kVrc], e.gen.power_dc_W + e.mot.power_dc_W);
+  return e;
+}
+
+// Inlined into derivatives() (the RK4 stages) and outputs(): one evaluation, no copy of it.
+[[gnu::always_inline]] inline void PsdPlant::derivatives_from(const Eval& e, const State& x, State& dx) const {
+  dx[kIceSpeed] = e.ice_accel_rad_s2;
+  dx[kRingSpeed] = e.ring_accel_rad_s2;
+  body_.derivatives(e.speed_m_s, {e.grade_rad, e.rolling_N, e.speed_force_N, e.grade_force_N}, e.brake_N,
+                    dx.data() + kBodyAt);
+  dx[kEmf] = battery_.demf_dt(e.battery);
+  dx[kVrc] = battery_.dvrc_dt(e.battery, x[kVrc]);
+  dx[kFuelKg] = e.fuel_rate_kg_s;
+  dx[kIceWorkJ] = e.ice_torque_Nm * x[kIceSpeed];
+  dx[kBatteryOutJ] = e.battery.voltage_V * e.battery.current_A;
+  dx[kGenLossJ] = e.gen.power_dc_W - e.gen.power_mech_W;
+  dx[kMotLossJ] = e.mot.power_dc_W - e.mot.power_mech_W;
+  dx[kBatteryLossJ] = e.battery.loss_W;
+}
+
+[[gnu::always_inline]] inline void PsdPlant::derivatives(double t_s, const State& x, const Modes& m, const Inputs& u, State& dx) const {
+  derivatives_from(eval(t_s, x, m, u), x, dx);
+}
 
 }  // namespace ehpt::plant

@@ -52,7 +52,10 @@ class RoadLoad {
   RoadLoad(const RoadLoadParams& p, double mass_kg);
 
   // Run phase: pure functions.
-  double grade_rad(double distance_m) const { return has_slope_ ? p_.slope_rad(distance_m) : 0.0; }
+  // (the flat-road test inline in every stage, the slope table out of line)
+  [[gnu::always_inline]] double grade_rad(double distance_m) const {
+    return has_slope_ ? slope_grade_rad(distance_m) : 0.0;
+  }
   // Rolling (Coulomb) magnitude, also the break-away force.
   double rolling_N(double grade_rad) const {
     return grade_rad == 0.0 ? rolling_level_N_ : rolling_level_N_ * std::cos(grade_rad);
@@ -68,6 +71,7 @@ class RoadLoad {
   bool has_slope() const { return has_slope_; }
 
  private:
+  [[gnu::noinline]] double slope_grade_rad(double distance_m) const { return p_.slope_rad(distance_m); }
   RoadLoadParams p_;
   double mass_kg_ = 0.0;
   double rolling_level_N_ = 0.0;  // A on level road

@@ -37,7 +37,7 @@ class AxisIndex {
 
   // Run phase.
   // (Signed integers on purpose: double <-> int64 is one instruction, size_t is not.)
-  Position locate(double u) const {
+  [[gnu::always_inline]] Position locate(double u) const {
     const double k = (u - x0_) * inv_width_;
     if (uniform_) {
       std::int64_t i = k > 0.0 ? static_cast<std::int64_t>(k) : 0;  // NaN -> 0
@@ -72,7 +72,7 @@ class Table1d {
   Table1d(std::vector<double> x, std::vector<double> y, Extrapolation extrapolation);
 
   // Run phase: no allocation.
-  double operator()(double u) const {
+  [[gnu::always_inline]] double operator()(double u) const {
     // inside the axis (the common case) no extrapolation rule is looked at
     if (u <= x_.front() || u >= x_.back()) return outside(u);
     return inside(u);
@@ -83,7 +83,7 @@ class Table1d {
   const std::vector<double>& y() const { return y_; }
 
  private:
-  double inside(double u) const {
+  [[gnu::always_inline]] double inside(double u) const {
     const AxisIndex::Position p = index_.locate(u);
     return y_[p.i] + p.t * (y_[p.i + 1] - y_[p.i]);
   }

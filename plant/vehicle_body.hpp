@@ -80,7 +80,7 @@ class VehicleBody {
     dx[kBrakeJ] = brake_N * speed_abs;
   }
   // Road load, grade and brake on the moving vehicle, signed against +v (0 when stuck).
-  static double resisting_N(Motion motion, const Forces& f, double brake_N) {
+  [[gnu::always_inline]] static double resisting_N(Motion motion, const Forces& f, double brake_N) {
     switch (motion) {
       case Motion::kForward: return f.rolling_N + f.speed_force_N + f.grade_force_N + brake_N;
       case Motion::kBackward: return -f.rolling_N + f.speed_force_N + f.grade_force_N - brake_N;

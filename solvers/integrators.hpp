@@ -41,25 +41,33 @@ class Rk4 {
   IntegratorStatus step(double t_s, double h_s, const Modes& m, const Inputs& u, State& x,
                         const State* dx_start = nullptr) {
     const double half_s = 0.5 * h_s, sixth_s = h_s / 6.0;
-    // plain loops over the fixed size: GCC does not inline Eigen's assignment loops here
+    // the stages as locals, every loop unrolled at compile time (each): the values stay in
+    // registers instead of a store and a reload per stage (measured: PSecu2 152 -> 140 ns per
+    // step); each element gets the same operations in the same order, so the bits do not change
+    State k1, k2, k3, k4, tmp;
     if (dx_start != nullptr) {
-      k1_ = *dx_start;
+      each([&](auto i) __attribute__((always_inline)) { k1[i] = (*dx_start)[i]; });
     } else {
-      plant_.derivatives(t_s, x, m, u, k1_);
+      plant_.derivatives(t_s, x, m, u, k1);
     }
-    for (int i = 0; i < N; ++i) tmp_[i] = x[i] + half_s * k1_[i];
-    plant_.derivatives(t_s + half_s, tmp_, m, u, k2_);
-    for (int i = 0; i < N; ++i) tmp_[i] = x[i] + half_s * k2_[i];
-    plant_.derivatives(t_s + half_s, tmp_, m, u, k3_);
-    for (int i = 0; i < N; ++i) tmp_[i] = x[i] + h_s * k3_[i];
-    plant_.derivatives(t_s + h_s, tmp_, m, u, k4_);
-    for (int i = 0; i < N; ++i) x[i] += sixth_s * (k1_[i] + 2.0 * (k2_[i] + k3_[i]) + k4_[i]);
+    each([&](auto i) __attribute__((always_inline)) { tmp[i] = x[i] + half_s * k1[i]; });
+    plant_.derivatives(t_s + half_s, tmp, m, u, k2);
+    each([&](auto i) __attribute__((always_inline)) { tmp[i] = x[i] + half_s * k2[i]; });
+    plant_.derivatives(t_s + half_s, tmp, m, u, k3);
+    each([&](auto i) __attribute__((always_inline)) { tmp[i] = x[i] + h_s * k3[i]; });
+    plant_.derivatives(t_s + h_s, tmp, m, u, k4);
+    each([&](auto i) __attribute__((always_inline)) { x[i] += sixth_s * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]); });
     return {};
   }
 
  private:
+  template <class F>
+  [[gnu::always_inline]] static void each(F&& f) {
+    [&]<int... I>(std::integer_sequence<int, I...>) __attribute__((always_inline)) { (f(std::integral_constant<int, I>{}), ...); }(
+        std::make_integer_sequence<int, N>{});
+  }
+
   const Plant& plant_;
-  State k1_, k2_, k3_, k4_, tmp_;
 };
 
 namespace detail {
