@@ -591,7 +591,8 @@ BatchResult run_batch(const Scenario& sc, const BatchOptions& opt, std::ostream&
   io::OutputDir dir;
   io::TextFileWriter csv;
   std::string error;
-  if (!dir.open(opt.out_dir, error) || !csv.open(dir.file("timeseries.csv"), error) ||
+  if (!sc.output.timeseries) csv.discard();
+  if (!dir.open(opt.out_dir, error) || (sc.output.timeseries && !csv.open(dir.file("timeseries.csv"), error)) ||
       (opt.driver != nullptr && !opt.driver->open(dir, error))) {
     log << "error: " << error << "\n";
     res.exit_code = 1;

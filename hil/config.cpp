@@ -28,6 +28,7 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
   toml::table scenario_doc;
   if (!parse_toml(path, scenario_doc, ctx)) {
     errors = ctx.errors;
+    out.inputs = std::move(ctx.inputs);
     return false;
   }
   std::vector<const toml::table*> layers;
@@ -64,6 +65,7 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
   {
     Reader r = sc.sub("output");
     out.output.signals = r.strings("signals");
+    out.output.timeseries = r.flag("timeseries", true);
     const int interval_layer = r.layer_of("interval_s"), decimation_layer = r.layer_of("decimation");
     has_interval = interval_layer >= 0;
     has_decimation = decimation_layer >= 0;
@@ -97,6 +99,7 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
   toml::table vehicle_doc;
   if (vehicle_ref.empty() || !parse_toml(vehicle_ref.path, vehicle_doc, ctx, &vehicle_ref)) {
     errors = ctx.errors;
+    out.inputs = std::move(ctx.inputs);
     return false;
   }
   std::vector<const toml::table*> vlayers;
@@ -199,6 +202,7 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
     if (auto* e = std::get_if<ecu::PsdEcuParams>(&out.ecu)) e->period_s = t.period_s;
   }
   for (std::string& w : ctx.warnings) out.warnings.push_back(std::move(w));
+  out.inputs = std::move(ctx.inputs);
   errors = ctx.errors;
   return errors.empty();
 }

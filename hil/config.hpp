@@ -41,6 +41,9 @@ struct SolverSettings {
 struct OutputSettings {
   std::vector<std::string> signals;  // empty: all of the plant's signals
   std::int64_t decimation = 100;     // write every n-th step (row 0 and the last step always)
+  // false: no timeseries.csv, summary.json only (a sweep's default); the rows are still
+  // computed, so trajectory_hash is the same either way
+  bool timeseries = true;
 };
 
 // [ecu] period_s (default 0.01 s, the bus contract's cycle time, GenMsgCycleTime in
@@ -54,6 +57,14 @@ struct EcuTiming {
   double period_s = kDefaultEcuPeriod_s;
   double latency_s = 0.0;
   std::string codec = "none";  // "none" or "can"
+};
+
+// A file the scenario read (the scenario, vehicle, cycle, maps, road tables), with the SHA-256
+// of its bytes: what a run depends on besides its overrides (a sweep's run id is made of these).
+struct InputFile {
+  std::string path;
+  std::string sha256;  // 64 hex digits
+  std::size_t bytes = 0;
 };
 
 struct Scenario {
@@ -72,6 +83,7 @@ struct Scenario {
   SolverSettings solver;
   OutputSettings output;
   std::vector<std::string> warnings;  // legal but surprising settings, "file:line: field = value: why"
+  std::vector<InputFile> inputs;      // every file read, in the order read, each once
 };
 
 // overrides: "dotted.key=value" as given to --set (value parsed as TOML, else taken as text).

@@ -6,6 +6,7 @@
 
 #include "hil/toml_guard.hpp"
 #include "io/number_format.hpp"
+#include "io/sha256.hpp"
 #include "io/text_file.hpp"
 
 namespace fs = std::filesystem;
@@ -31,6 +32,13 @@ std::string location(const toml::node* n, const std::string& fallback) {
 
 // ref: the key that names the file (the vehicle file), so that a missing file is reported
 // there; nullptr for the scenario itself.
+void Context::read_file(const std::string& path, const std::string& content) {
+  for (const InputFile& f : inputs) {
+    if (f.path == path) return;
+  }
+  inputs.push_back(InputFile{path, io::sha256_hex(content), content.size()});
+}
+
 bool parse_toml(const std::string& path, toml::table& out, Context& ctx, const FileRef* ref) {
   std::string content, reason;
   if (!io::read_text_file(path, content, reason)) {
@@ -41,9 +49,11 @@ bool parse_toml(const std::string& path, toml::table& out, Context& ctx, const F
     }
     return false;
   }
+  ctx.read_file(path, content);
   if (const int line = line_with_too_many_dots(content); line != 0) {
     ctx.errors.push_back(path + ":" + std::to_string(line) + ": more than " + std::to_string(kMaxDotsPerLine) +
-                         " dots on one line (a dotted key that long would overflow the TOML parser)");
+                         " dots on one line (a dotted key that long would overflow the TOML parser; write a long "
+                         "array of numbers over several lines)");
     return false;
   }
   try {
@@ -117,6 +127,7 @@ bool read_table(const FileRef& ref, const std::string& field, io::CsvTable& t, C
     ctx.unreadable(ref, reason);
     return false;
   }
+  ctx.read_file(ref.path, content);
   return io::parse_csv_table(ref.path, content, t, ctx.errors);
 }
 

@@ -13,6 +13,7 @@
 
 #include <toml++/toml.h>
 
+#include "hil/config.hpp"
 #include "io/csv_table.hpp"
 #include "plant/problems.hpp"
 #include "plant/table.hpp"
@@ -54,6 +55,9 @@ struct Context {
   std::set<std::string> failed_tables;  // fields whose file could not be read: no follow-on problems
 
   std::set<std::string> reported;  // fields with a problem already: validate() need not repeat it
+  // every file read, in the order read (each once): what the run depends on (hil/config.hpp)
+  std::vector<InputFile> inputs;
+  void read_file(const std::string& path, const std::string& content);
 
   void error(const std::string& loc, const std::string& field, const std::string& value,
              const std::string& expected) {

@@ -66,7 +66,7 @@ int CsvTable::column_index(const std::string& name) const {
 }
 
 bool parse_csv_table(const std::string& path, const std::string& content, CsvTable& out,
-                     std::vector<std::string>& errors) {
+                     std::vector<std::string>& errors, bool numbers) {
   out = CsvTable{};
   out.path = path;
   const std::size_t errors_before = errors.size();
@@ -113,7 +113,7 @@ bool parse_csv_table(const std::string& path, const std::string& content, CsvTab
     }
     bool row_ok = true;
     row.assign(fields.size(), 0.0);
-    for (std::size_t c = 0; c < fields.size(); ++c) {
+    for (std::size_t c = 0; c < fields.size() && numbers; ++c) {
       if (!parse_number(fields[c], row[c])) {
         report(where + "column " + out.header[c] + ": \"" + fields[c] + "\" is not a number");
         row_ok = false;
@@ -121,7 +121,7 @@ bool parse_csv_table(const std::string& path, const std::string& content, CsvTab
     }
     if (!row_ok) continue;
     for (std::size_t c = 0; c < row.size(); ++c) {
-      out.columns[c].push_back(row[c]);
+      if (numbers) out.columns[c].push_back(row[c]);
       out.text[c].push_back(fields[c]);
     }
     out.lines.push_back(line_no);
@@ -137,14 +137,14 @@ bool parse_csv_table(const std::string& path, const std::string& content, CsvTab
   return errors.size() == errors_before;
 }
 
-bool read_csv_table(const std::string& path, CsvTable& out, std::vector<std::string>& errors) {
+bool read_csv_table(const std::string& path, CsvTable& out, std::vector<std::string>& errors, bool numbers) {
   std::string content, reason;
   if (!read_text_file(path, content, reason)) {
     out = CsvTable{};
     errors.push_back(path + ": cannot read: " + reason);
     return false;
   }
-  return parse_csv_table(path, content, out, errors);
+  return parse_csv_table(path, content, out, errors, numbers);
 }
 
 }  // namespace ehpt::io

@@ -23,11 +23,12 @@ struct CsvTable {
 };
 
 // Parses CSV text read from path (path only names the file in messages). Returns false and
-// appends messages to errors when it is empty or malformed.
+// appends messages to errors when it is empty or malformed. numbers = false: the fields are
+// kept as text only (CsvTable::text; columns stay empty), e.g. a sweep's list of variants.
 bool parse_csv_table(const std::string& path, const std::string& content, CsvTable& out,
-                     std::vector<std::string>& errors);
+                     std::vector<std::string>& errors, bool numbers = true);
 
 // Reads (io::read_text_file: regular files only, size bounded) and parses the file.
-bool read_csv_table(const std::string& path, CsvTable& out, std::vector<std::string>& errors);
+bool read_csv_table(const std::string& path, CsvTable& out, std::vector<std::string>& errors, bool numbers = true);
 
 }  // namespace ehpt::io

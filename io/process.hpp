@@ -16,7 +16,24 @@ int run_program(const std::vector<std::string>& argv, std::string& reason);
 // waitpid). stdin reads /dev/null; stdout and stderr go to the files named (created or
 // truncated; "" keeps ours). new_group: the child leads a process group of its own, so that
 // killpg(pid, ...) reaches it and whatever it starts. Returns the pid, or -1 (reason set).
+// extra_env: "NAME=value" entries added to (and overriding) our environment for the child.
 int start_program(const std::vector<std::string>& argv, const std::string& stdout_path,
-                  const std::string& stderr_path, bool new_group, std::string& reason);
+                  const std::string& stderr_path, bool new_group, std::string& reason,
+                  const std::vector<std::string>& extra_env = {});
+
+// Runs argv[0] (an absolute path) with argv and returns its exit status as run_program does;
+// its stdout and stderr together are returned in output (at most max_bytes; the rest is read
+// and dropped). A program still running after timeout_s is killed (SIGKILL): -1, reason
+// "timed out after N s". For short client commands (sbatch, squeue, sinfo) that could hang.
+int capture_program(const std::vector<std::string>& argv, std::string& output, double timeout_s,
+                    std::string& reason, std::size_t max_bytes = 1 << 20);
+
+// The absolute path of a program found on $PATH (names with a '/' as given), "" if none is
+// executable.
+std::string find_program(const std::string& name);
+
+// This binary, as a path that stays valid in children (not /proc/self/exe: in unshare or
+// any other program it would name that program).
+std::string self_executable();
 
 }  // namespace ehpt::io

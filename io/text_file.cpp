@@ -88,6 +88,7 @@ bool TextFileWriter::open(const std::string& path, std::string& error) {
 }
 
 bool TextFileWriter::write(std::string_view text, std::string& error) {
+  if (discard_) return true;
   if (fd_ < 0) {
     error = path_ + ": write failed: not open";
     return false;

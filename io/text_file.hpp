@@ -29,12 +29,15 @@ class TextFileWriter {
   TextFileWriter(const TextFileWriter&) = delete;
   TextFileWriter& operator=(const TextFileWriter&) = delete;
   bool open(const std::string& path, std::string& error);  // O_EXCL: never an existing file
+  // instead of open: every write succeeds and goes nowhere (a run that keeps its summary only)
+  void discard() { discard_ = true; }
   bool write(std::string_view text, std::string& error);
   bool close(std::string& error);
 
  private:
   std::string path_;
   int fd_ = -1;
+  bool discard_ = false;
 };
 
 }  // namespace ehpt::io

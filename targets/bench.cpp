@@ -58,6 +58,7 @@
 #include "hil/realtime.hpp"
 #include "hil/scenario.hpp"
 #include "hil/simulation.hpp"
+#include "io/json_value.hpp"
 #include "io/number_format.hpp"
 #include "io/output_dir.hpp"
 #include "io/process.hpp"
@@ -188,195 +189,37 @@ std::string find_program(const std::string& name) {
   return "";
 }
 
-// ---- a small JSON reader (the sub-runs' summary.json, an earlier bench.json) ------------
+// ---- reading JSON (the sub-runs' summary.json, an earlier bench.json): io/json_value.hpp ---
 
-struct JsonMember;
+using Json = ehpt::io::JsonValue;
 
-struct Json {
-  enum class Type { kNull, kBool, kNumber, kString, kArray, kObject };
-  Type type = Type::kNull;
-  bool boolean = false;
-  double number = 0.0;
-  std::string text;
-  std::vector<Json> items;
-  std::vector<JsonMember> members;  // (not std::pair: clang 14 with libstdc++ 12 cannot
-                                    // instantiate a pair of an incomplete Json)
-
-  const Json* get(std::string_view key) const;
-  // a.b.c through nested objects
-  const Json* at(std::string_view path) const;
-  double num(std::string_view path) const;
-  std::string str(std::string_view path) const;
-};
-
-struct JsonMember {
-  std::string key;
-  Json value;
-};
-
-const Json* Json::get(std::string_view key) const {
-  for (const auto& [k, v] : members) {
-    if (k == key) return &v;
-  }
-  return nullptr;
-}
-
-const Json* Json::at(std::string_view path) const {
-  const Json* j = this;
-  while (j != nullptr && !path.empty()) {
+// a.b.c through nested objects; nullptr if a part is missing
+const Json* json_at(const Json& j, std::string_view path) {
+  const Json* v = &j;
+  while (v != nullptr && !path.empty()) {
     const auto dot = path.find('.');
-    j = j->get(path.substr(0, dot));
+    v = v->find(path.substr(0, dot));
     path = dot == std::string_view::npos ? std::string_view() : path.substr(dot + 1);
   }
-  return j;
+  return v;
 }
 
-double Json::num(std::string_view path) const {
-  const Json* j = at(path);
-  return j != nullptr && j->type == Type::kNumber ? j->number : NAN;
+// The number at path, NaN if it is missing or not a number.
+double json_num(const Json& j, std::string_view path) {
+  const Json* v = json_at(j, path);
+  double x = NAN;
+  return v != nullptr && v->kind == Json::Kind::kNumber && ehpt::io::parse_number(v->text, x) ? x : NAN;
 }
 
-std::string Json::str(std::string_view path) const {
-  const Json* j = at(path);
-  return j != nullptr && j->type == Type::kString ? j->text : std::string();
+std::string json_str(const Json& j, std::string_view path) {
+  const Json* v = json_at(j, path);
+  return v != nullptr && v->kind == Json::Kind::kString ? v->text : std::string();
 }
-
-class JsonReader {
- public:
-  explicit JsonReader(const std::string& t) : t_(t) {}
-  bool parse(Json& out) {
-    if (!value(out, 0)) return false;
-    space();
-    return i_ == t_.size();
-  }
-
- private:
-  void space() {
-    while (i_ < t_.size() && (t_[i_] == ' ' || t_[i_] == '\n' || t_[i_] == '\r' || t_[i_] == '\t')) ++i_;
-  }
-  bool literal(const char* word) {
-    const std::size_t n = std::strlen(word);
-    if (t_.compare(i_, n, word) != 0) return false;
-    i_ += n;
-    return true;
-  }
-  bool string(std::string& s) {
-    if (i_ >= t_.size() || t_[i_] != '"') return false;
-    ++i_;
-    while (i_ < t_.size() && t_[i_] != '"') {
-      char c = t_[i_++];
-      if (c != '\\') {
-        s += c;
-        continue;
-      }
-      if (i_ >= t_.size()) return false;
-      c = t_[i_++];
-      switch (c) {
-        case 'n': s += '\n'; break;
-        case 't': s += '\t'; break;
-        case 'r': s += '\r'; break;
-        case 'b': s += '\b'; break;
-        case 'f': s += '\f'; break;
-        case 'u': {
-          if (i_ + 4 > t_.size()) return false;
-          const unsigned long cp = std::strtoul(t_.substr(i_, 4).c_str(), nullptr, 16);
-          i_ += 4;
-          if (cp < 0x80) {
-            s += static_cast<char>(cp);
-          } else if (cp < 0x800) {
-            s += static_cast<char>(0xC0 | (cp >> 6));
-            s += static_cast<char>(0x80 | (cp & 0x3F));
-          } else {
-            s += static_cast<char>(0xE0 | (cp >> 12));
-            s += static_cast<char>(0x80 | ((cp >> 6) & 0x3F));
-            s += static_cast<char>(0x80 | (cp & 0x3F));
-          }
-          break;
-        }
-        default: s += c;  // \" \\ \/
-      }
-    }
-    if (i_ >= t_.size()) return false;
-    ++i_;
-    return true;
-  }
-  bool value(Json& v, int depth) {
-    if (depth > 64) return false;
-    space();
-    if (i_ >= t_.size()) return false;
-    const char c = t_[i_];
-    if (c == '{') {
-      v.type = Json::Type::kObject;
-      ++i_;
-      space();
-      if (i_ < t_.size() && t_[i_] == '}') return ++i_, true;
-      while (true) {
-        space();
-        std::string key;
-        if (!string(key)) return false;
-        space();
-        if (i_ >= t_.size() || t_[i_] != ':') return false;
-        ++i_;
-        Json item;
-        if (!value(item, depth + 1)) return false;
-        v.members.push_back(JsonMember{std::move(key), std::move(item)});
-        space();
-        if (i_ < t_.size() && t_[i_] == ',') {
-          ++i_;
-          continue;
-        }
-        if (i_ < t_.size() && t_[i_] == '}') return ++i_, true;
-        return false;
-      }
-    }
-    if (c == '[') {
-      v.type = Json::Type::kArray;
-      ++i_;
-      space();
-      if (i_ < t_.size() && t_[i_] == ']') return ++i_, true;
-      while (true) {
-        Json item;
-        if (!value(item, depth + 1)) return false;
-        v.items.push_back(std::move(item));
-        space();
-        if (i_ < t_.size() && t_[i_] == ',') {
-          ++i_;
-          continue;
-        }
-        if (i_ < t_.size() && t_[i_] == ']') return ++i_, true;
-        return false;
-      }
-    }
-    if (c == '"') {
-      v.type = Json::Type::kString;
-      return string(v.text);
-    }
-    if (literal("true")) {
-      v.type = Json::Type::kBool;
-      v.boolean = true;
-      return true;
-    }
-    if (literal("false")) {
-      v.type = Json::Type::kBool;
-      return true;
-    }
-    if (literal("null")) return true;
-    const char* start = t_.c_str() + i_;
-    char* end = nullptr;
-    v.number = std::strtod(start, &end);
-    if (end == start) return false;
-    v.type = Json::Type::kNumber;
-    i_ += static_cast<std::size_t>(end - start);
-    return true;
-  }
-
-  const std::string& t_;
-  std::size_t i_ = 0;
-};
 
 bool read_json(const std::string& path, Json& out) {
   const std::string text = read_small_file(path);
-  return !text.empty() && JsonReader(text).parse(out);
+  std::string error;
+  return !text.empty() && ehpt::io::parse_json(text, out, error);
 }
 
 // ---- child processes --------------------------------------------------------------------
@@ -572,7 +415,7 @@ bool is_earlier_bench(const std::string& dir, std::string& why_not) {
   Json j;
   struct stat st {};
   if (::lstat((dir + "/bench.json").c_str(), &st) != 0 || !S_ISREG(st.st_mode) || !read_json(dir + "/bench.json", j) ||
-      j.str("format") != kBenchFormat) {
+      json_str(j, "format") != kBenchFormat) {
     why_not = "it is not empty and not an earlier ehpt bench (no bench.json of ours)";
     return false;
   }
@@ -958,11 +801,11 @@ bool read_summary(const std::string& dir, std::time_t since, Json& j, std::strin
 }
 
 void take_summary(SubRun& r, const Json& j) {
-  r.hash = j.str("trajectory_hash");
-  const Json* a = j.get("heap_allocations_after_startup");
-  r.allocations_reported = a != nullptr && a->type == Json::Type::kNumber;
-  if (r.allocations_reported) r.allocations = static_cast<long long>(a->number);
-  r.peak_rss_MB = j.num("peak_rss_MB");
+  r.hash = json_str(j, "trajectory_hash");
+  const double allocations = json_num(j, "heap_allocations_after_startup");
+  r.allocations_reported = std::isfinite(allocations);
+  if (r.allocations_reported) r.allocations = static_cast<long long>(allocations);
+  r.peak_rss_MB = json_num(j, "peak_rss_MB");
   r.status = "ok";
 }
 
@@ -1242,18 +1085,18 @@ void section_latency(Bench& b) {
   } else {
     take_summary(r, j);
     Latency& l = b.rt_loop;
-    l.p50 = j.num("realtime.wakeup_latency_us.p50");
-    l.p99 = j.num("realtime.wakeup_latency_us.p99");
-    l.p99_9 = j.num("realtime.wakeup_latency_us.p99_9");
-    l.max = j.num("realtime.wakeup_latency_us.max");
-    l.mean = j.num("realtime.wakeup_latency_us.mean");
-    l.samples = static_cast<long long>(j.num("realtime.ticks"));
+    l.p50 = json_num(j, "realtime.wakeup_latency_us.p50");
+    l.p99 = json_num(j, "realtime.wakeup_latency_us.p99");
+    l.p99_9 = json_num(j, "realtime.wakeup_latency_us.p99_9");
+    l.max = json_num(j, "realtime.wakeup_latency_us.max");
+    l.mean = json_num(j, "realtime.wakeup_latency_us.mean");
+    l.samples = static_cast<long long>(json_num(j, "realtime.ticks"));
     l.status = std::isfinite(l.p99) ? "ok" : "failed: no realtime figures in realtime/summary.json";
     b.ticks = l.samples;
-    b.overruns = static_cast<long long>(j.num("realtime.overruns"));
-    b.missed_ticks = static_cast<long long>(j.num("realtime.missed_ticks"));
-    b.rt_scheduler = j.str("realtime.scheduler");
-    if (const Json* w = j.at("realtime.setup_warnings"); w != nullptr) {
+    b.overruns = static_cast<long long>(json_num(j, "realtime.overruns"));
+    b.missed_ticks = static_cast<long long>(json_num(j, "realtime.missed_ticks"));
+    b.rt_scheduler = json_str(j, "realtime.scheduler");
+    if (const Json* w = json_at(j, "realtime.setup_warnings"); w != nullptr) {
       for (const auto& i : w->items) b.rt_warnings.push_back(i.text);
     }
   }
@@ -1843,15 +1686,6 @@ bool write_reports(Bench& b, bool with_text, std::string& text) {
   return true;
 }
 
-// This binary, as a path that stays valid in children (not /proc/self/exe: in unshare or
-// any other program it would name that program).
-std::string self_exe() {
-  std::error_code ec;
-  const fs::path p = fs::read_symlink("/proc/self/exe", ec);
-  if (ec) return "/proc/self/exe";
-  return p.string();
-}
-
 }  // namespace
 
 int cmd_bench(const std::vector<std::string>& args) {
@@ -1871,7 +1705,7 @@ int cmd_bench(const std::vector<std::string>& args) {
   b.reps = b.opt.quick ? 1 : 3;
   b.cvode_s = b.opt.quick ? 400.0 : 0.0;
   b.wall_clock_s = std::min(b.seconds, 10);
-  b.exe = self_exe();
+  b.exe = ehpt::io::self_executable();
   b.dir = b.opt.out;
 
   // the folder: checked before anything is made; locked; checked again under the lock

@@ -13,6 +13,7 @@
 #include <fcntl.h>   // AT_FDCWD
 #include <stdio.h>   // renameat2, RENAME_NOREPLACE
 #include <stdlib.h>  // mkdtemp
+#include <sys/prctl.h>  // PR_SET_PDEATHSIG
 #include <unistd.h>
 
 #include <algorithm>
@@ -46,6 +47,7 @@
 #include "io/number_format.hpp"
 #include "io/process.hpp"
 #include "targets/bench.hpp"
+#include "targets/sweep.hpp"
 #include "io/text_file.hpp"
 
 namespace fs = std::filesystem;
@@ -97,6 +99,8 @@ const char* kMainHelp =
     "  ecu SCENARIO     run the scenario's built-in ECU as its own process on a CAN bus\n"
     "  bench            the timing and determinism benchmark; a table and bench.json (--quick: < 1 min)\n"
     "  replay RUN_DIR   run a recorded 'ehpt plant' session again, offline, bit for bit\n"
+    "  sweep CAMPAIGN   run a campaign (scenarios x parameters) locally or as a Slurm job array;\n"
+    "                   merged results.csv and results.jsonl\n"
     "\n"
     "'ehpt <command> --help' gives the options of a command.\n"
     "Exit codes: 0 ok, 1 usage, output or system error, 2 bad input (nothing run), 3 run-time\n"
@@ -200,7 +204,9 @@ const char* kPlotHelp =
     "usage: ehpt plot DIR\n"
     "Draws PNG figures (speed, torques and limiter state, powers, SOC, locked flag) from\n"
     "DIR/timeseries.csv into DIR, with tools/plot.py under /usr/bin/python3. A figure\n"
-    "replaces a file of the same name only if DIR's ehpt-manifest.txt lists it.\n";
+    "replaces a file of the same name only if DIR's ehpt-manifest.txt lists it.\n"
+    "On a sweep folder ('ehpt sweep --out DIR'): fuel (or battery Wh/km) against final SOC,\n"
+    "one panel per scenario, coloured by each swept parameter (sweep_*.png).\n";
 
 bool wants_help(const std::vector<std::string>& args) {
   for (const auto& a : args) {
@@ -247,6 +253,8 @@ int plot_existing(const std::string& dir, bool quiet) {
   std::vector<std::string> listed;
   std::string why;
   const bool ehpt_run = ehpt::io::is_earlier_run(dir, listed, why);
+  // a sweep folder's figures (sweep_*.png, from results.csv) are ehpt's too
+  const bool sweep = is_sweep_folder(dir);
   std::string tmpl = dir + "/.ehpt-plot-XXXXXX";
   if (::mkdtemp(tmpl.data()) == nullptr) {
     std::cerr << "error: " << dir << ": cannot create a temporary folder: " << std::strerror(errno) << "\n";
@@ -259,7 +267,8 @@ int plot_existing(const std::string& dir, bool quiet) {
   for (fs::directory_iterator it(tmp, list_ec), end; ok && !list_ec && it != end; it.increment(list_ec)) {
     const std::string name = it->path().filename().string();
     const std::string target = dir + "/" + name;
-    const bool ours = ehpt_run && std::find(listed.begin(), listed.end(), name) != listed.end();
+    const bool ours = (ehpt_run && std::find(listed.begin(), listed.end(), name) != listed.end()) ||
+                      (sweep && name.starts_with("sweep_") && name.ends_with(".png"));
     // a listed figure of ours is replaced; any other name only if it is free (no replace)
     const bool renamed = ours ? ::rename(it->path().c_str(), target.c_str()) == 0
                               : ::renameat2(AT_FDCWD, it->path().c_str(), AT_FDCWD, target.c_str(), RENAME_NOREPLACE) == 0;
@@ -461,7 +470,8 @@ int cmd_run(const std::vector<std::string>& args) {
   if (!quiet) {
     std::string text = r.summary_text;
     if (!r.results_dir.empty()) {
-      text += "outputs       " + r.results_dir + "/timeseries.csv, " + r.results_dir + "/summary.json\n";
+      text += "outputs       " + (sc.output.timeseries ? r.results_dir + "/timeseries.csv, " : std::string()) +
+              r.results_dir + "/summary.json\n";
     }
     printed = out(text);
   }
@@ -871,6 +881,7 @@ int dispatch(std::vector<std::string> args) {
   if (cmd == "ecu") return cmd_ecu(args);
   if (cmd == "bench") return cmd_bench(args);
   if (cmd == "replay") return cmd_replay(args);
+  if (cmd == "sweep") return cmd_sweep(args, g_stop);
   std::cerr << "unknown command '" << cmd << "'\n\n" << kMainHelp;
   return 1;
 }
@@ -879,6 +890,12 @@ int dispatch(std::vector<std::string> args) {
 
 int main(int argc, char** argv) {
   install_signal_handlers();
+  // A run started by 'ehpt sweep' ends (SIGTERM: cleanly, as an interrupted run) when the sweep
+  // dies, even by SIGKILL, instead of holding its folder's lock against the next sweep.
+  if (const char* parent = std::getenv("EHPT_SWEEP_PID")) {
+    ::prctl(PR_SET_PDEATHSIG, SIGTERM);
+    if (std::to_string(::getppid()) != parent) g_stop.store(SIGTERM);  // it died before prctl
+  }
   // nothing escapes as an abort: out of memory and any other exception end with one line
   // (an output folder being written is removed by its destructor: it holds nothing useful)
   try {

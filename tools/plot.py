@@ -13,10 +13,21 @@ column tauElectrical_Nm etc.) give torque, power and efficiency figures; the
 detailed-machine rigs (TestPMDrive/TestAMDrive, column det_v_a_V) give the phase
 voltage against the quasi-static envelope, the torques, and a zoom on a few periods.
 A figure whose columns are absent from the CSV is skipped silently.
+
+A sweep folder (DIR/sweep.json, written by `ehpt sweep`) is drawn from DIR/results.csv
+instead (one row per run: run_id, scenario, the swept keys, sweep_status, exit_code,
+message, then the run's summary.json flattened): for each swept key K,
+sweep_fuel_vs_soc_<K, dots as _>.png plots fuel [L/100 km] against final SOC, one panel per
+scenario, each run coloured by its value of K (battery Wh/km instead of fuel for a scenario
+that burns none, e.g. an EV); with no swept key, one sweep_fuel_vs_soc.png coloured by
+scenario.  Runs that are not ok are not drawn (the title counts them); with none to draw,
+nothing is written and the exit status is 1.
 """
 import csv
 import json
+import math
 import os
+import re
 import sys
 import tempfile
 
@@ -94,7 +105,7 @@ class Plotter:
         if "time_s" in cols:
             self.t, self.tlabel = cols["time_s"], "time [s]"
         else:
-            n = len(next(iter(cols.values())))
+            n = len(next(iter(cols.values()), []))  # a sweep has no columns
             self.t, self.tlabel = np.arange(n, dtype=float), "sample"
 
     def has(self, *names):
@@ -408,6 +419,125 @@ class Plotter:
         self.save(fig, "detailed_zoom.png")
 
 
+# -------------------------------------------------------------------- sweep folders
+def number(text):
+    """float(text), or NaN for an empty, unparsable or infinite field."""
+    try:
+        v = float(text)
+    except (TypeError, ValueError):
+        return math.nan
+    return v if math.isfinite(v) else math.nan
+
+
+def load_results(path):
+    """(swept keys, runs) of a sweep's results.csv; a run is {column: text}.  A column name
+    met twice (the summary's own "scenario") keeps its first value."""
+    if not os.path.isfile(path):
+        raise PlotError(f"{path}: file not found")
+    try:
+        with open(path, newline="") as f:
+            rows = [r for r in csv.reader(f) if any(x.strip() for x in r)]
+    except (OSError, UnicodeDecodeError, csv.Error) as e:
+        raise PlotError(f"{path}: cannot read as CSV ({e})")
+    if not rows:
+        raise PlotError(f"{path}: file is empty")
+    header = [h.strip() for h in rows[0]]
+    if "scenario" not in header or "sweep_status" not in header[header.index("scenario"):]:
+        raise PlotError(f"{path}: no scenario ... sweep_status header: not a sweep's results")
+    keys = header[header.index("scenario") + 1:header.index("sweep_status")]
+    runs = [r for r in rows[1:] if len(r) == len(header)]
+    if len(runs) < len(rows) - 1:  # e.g. a truncated last line
+        print(f"plot.py: warning: {path}: skipped {len(rows) - 1 - len(runs)} row(s) with wrong "
+              "field count", file=sys.stderr)
+    return keys, [dict(reversed(list(zip(header, (x.strip() for x in r))))) for r in runs]
+
+
+def sweep(src, p):
+    """Fuel (or battery energy) against final SOC for every run of a sweep, per swept key."""
+    keys, runs = load_results(os.path.join(src, "results.csv"))
+    campaign = load_summary(os.path.join(src, "sweep.json")).get("campaign")
+    campaign = os.path.splitext(os.path.basename(str(campaign)))[0] if campaign else \
+        os.path.basename(os.path.abspath(src))
+    ok = [r for r in runs if r["sweep_status"] == "ok"]
+    scenarios = list(dict.fromkeys(r["scenario"] for r in ok))  # the campaign's order
+    burns = {s: any(number(r.get("fuel_L_per_100km")) > 0 for r in ok if r["scenario"] == s)
+             for s in scenarios}  # else an EV: battery energy instead of fuel
+    y_of = {s: "fuel_L_per_100km" if burns[s] else "battery_Wh_per_km" for s in scenarios}
+    drawn = [r for r in ok if not math.isnan(number(r.get("soc_end")))
+             and not math.isnan(number(r.get(y_of[r["scenario"]])))]
+    counts, drawn_ids = {}, {id(r) for r in drawn}
+    for r in runs:
+        if id(r) not in drawn_ids:
+            st = r["sweep_status"] if r["sweep_status"] != "ok" else "ok without values"
+            counts[st] = counts.get(st, 0) + 1
+    # "failed" and "pending" first, then anything else a newer ehpt may write
+    order = sorted(counts, key=lambda st: (st not in ("failed", "pending"), st))
+    not_drawn = ", ".join(f"{counts[st]} {st or 'no status'}" for st in order)
+    if not drawn:
+        raise PlotError(f"{src}/results.csv: no successful run to plot ({len(runs)} runs"
+                        + (f": {not_drawn})" if not_drawn else ")"))
+    ylabels = {"fuel_L_per_100km": "fuel [L/100 km]", "battery_Wh_per_km": "battery [Wh/km]"}
+
+    for key in keys or [None]:
+        colour_by = key or "scenario"
+        if key:  # one panel per scenario
+            panels = [(s, [r for r in drawn if r["scenario"] == s]) for s in scenarios]
+        else:  # one run per scenario: the fuel burners together, the EVs together
+            panels = [(t, [r for r in drawn if burns[r["scenario"]] == b])
+                      for t, b in (("with fuel", True), ("battery only", False))]
+        panels = [(t, rs) for t, rs in panels if rs]
+        values = sorted({r[colour_by] for r in drawn},
+                        key=lambda v: (math.isnan(number(v)), number(v), v))
+        numeric = not any(math.isnan(number(v)) for v in values)
+        if numeric and len(values) > 8:  # a colour scale and a colorbar
+            norm = matplotlib.colors.Normalize(number(values[0]), number(values[-1]))
+            colour = {v: plt.cm.viridis(norm(number(v))) for v in values}
+        elif numeric:  # an ordered key: a sequential map, short of viridis's pale yellow
+            colour = {v: plt.cm.viridis(x) for v, x in zip(values, np.linspace(0, 0.85, len(values)))}
+        else:
+            cmap = plt.cm.tab10 if len(values) <= 10 else plt.cm.tab20
+            colour = {v: cmap(i % cmap.N) for i, v in enumerate(values)}
+
+        ncols = min(len(panels), 3)
+        nrows = -(-len(panels) // ncols)
+        spare = len(panels) < nrows * ncols  # an empty slot for the legend, else a column
+        fig = plt.figure(figsize=(4.2 * ncols + (0 if spare else 2.2), 3.4 * nrows + 1.0), dpi=100)
+        grid = fig.add_gridspec(nrows, ncols + (0 if spare else 1),
+                                width_ratios=[1] * ncols + ([] if spare else [0.5]))
+        for i, (title, rs) in enumerate(panels):
+            ax = fig.add_subplot(grid[i // ncols, i % ncols])
+            x0s = {round(number(r.get("soc_start")), 4) for r in rs}
+            for x0 in sorted(x for x in x0s if not math.isnan(x))[:8]:
+                ax.axvline(x0, ls="--", lw=1, color="tab:gray")
+            ax.scatter([number(r["soc_end"]) for r in rs],
+                       [number(r[y_of[r["scenario"]]]) for r in rs],
+                       c=[colour[r[colour_by]] for r in rs], s=45, edgecolors="black",
+                       linewidths=0.5, zorder=3)
+            ax.set_title(title, fontsize="medium")
+            ax.set_xlabel("final SOC [-]")
+            ax.set_ylabel(ylabels[y_of[rs[0]["scenario"]]])
+            ax.ticklabel_format(useOffset=False)
+            ax.grid(True, alpha=0.4)
+        side = fig.add_subplot(grid[-1, -1] if spare else grid[:, ncols])  # shared legend
+        side.axis("off")
+        start = [matplotlib.lines.Line2D([], [], ls="--", lw=1, color="tab:gray",
+                                         label="initial SOC")]
+        if numeric and len(values) > 8:
+            cax = side.inset_axes([0.05, 0.3, 0.12, 0.65])
+            fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=plt.cm.viridis), cax=cax,
+                         label=colour_by)
+            side.legend(handles=start, loc="lower left", fontsize="small")
+        else:
+            side.legend(handles=[matplotlib.lines.Line2D(
+                [], [], ls="", marker="o", markeredgecolor="black", markeredgewidth=0.5,
+                color=colour[v], label=v) for v in values] + start,
+                title=colour_by, loc="center left", fontsize="small", title_fontsize="small")
+        fig.suptitle(f"{campaign}: consumption vs final SOC, coloured by {colour_by}\n"
+                     f"{len(drawn)} runs drawn" + (f"; not drawn: {not_drawn}" if not_drawn else ""))
+        name = "sweep_fuel_vs_soc" + (("_" + re.sub(r"[^A-Za-z0-9_-]", "_", key)) if key else "")
+        p.save(fig, name + ".png")
+
+
 USAGE = "usage: /usr/bin/python3 tools/plot.py DIR [--out-dir OUT] [--as NAME] [--quiet]"
 
 
@@ -435,6 +565,10 @@ def main(argv):
         print(USAGE, file=sys.stderr)
         return 2
     out_dir = out_dir or src
+    if os.path.isfile(os.path.join(src, "sweep.json")):  # `ehpt sweep`'s folder
+        p = Plotter(out_dir, {}, "", quiet, shown)
+        sweep(src, p)
+        return 0
     cols = load_csv(os.path.join(src, "timeseries.csv"))
     scenario = load_summary(os.path.join(src, "summary.json")).get("scenario")
     p = Plotter(out_dir, cols, str(scenario) if scenario else "", quiet, shown)

@@ -225,7 +225,7 @@ TEST(Config, AKeyWithThousandsOfDottedPartsIsRefusedNotACrash) {
     EXPECT_FALSE(load_scenario(scenario, {}, sc, errs));
     ASSERT_EQ(errs.size(), 1u);
     EXPECT_EQ(errs[0], vehicle + ":2: more than 1000 dots on one line (a dotted key that long would overflow the "
-                                 "TOML parser)");
+                                 "TOML parser; write a long array of numbers over several lines)");
   }
   std::filesystem::remove_all(dir);
   // ordinary text passes; the limit is per line
