@@ -301,9 +301,10 @@ class Safety(BusTest):
                 elif kind == "replay":
                     # the latest command frame this client heard, again: a repeated counter
                     at = buf.rfind(b"< frame 111 ")
-                    if at < 0:
+                    end = buf.find(b">", at) if at >= 0 else -1
+                    if end < 0:  # none heard yet, or its end not received yet
                         continue
-                    fields = buf[at:buf.index(b">", at)].split()
+                    fields = buf[at:end].split()
                     data = bytes.fromhex(fields[4].decode())
                     msgs.append("< send 111 8 %s >" % " ".join("%X" % b for b in data))
                 elif kind == "range":
