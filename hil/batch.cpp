@@ -14,6 +14,7 @@
 
 #include "hil/alloc_guard.hpp"
 #include "hil/pacer.hpp"
+#include "hil/provenance.hpp"
 #include "hil/row_queue.hpp"
 #include "hil/simulation.hpp"
 #include "hil/trajectory_hash.hpp"
@@ -518,6 +519,7 @@ io::JsonObject summary_json(const Scenario& sc, const Report& r, const std::vect
   j.number("peak_rss_MB", static_cast<double>(peak_rss_bytes()) / (1024.0 * 1024.0));
   if (r.run.realtime) j.object("realtime", realtime_json(*r.run.realtime));
   j.strings("warnings", warnings);
+  j.object("provenance", provenance_json(sc));
   return j;
 }
 

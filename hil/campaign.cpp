@@ -5,6 +5,7 @@
 #include <set>
 
 #include "hil/config_reader.hpp"
+#include "hil/provenance.hpp"
 #include "hil/scenario.hpp"
 #include "io/csv_table.hpp"
 #include "io/number_format.hpp"
@@ -372,12 +373,10 @@ CampaignRun campaign_run(const Campaign& c, std::uint64_t index) {
 }
 
 std::string run_id(const std::vector<InputFile>& inputs, const std::vector<CampaignOverride>& overrides) {
-  // a text that names every byte the run depends on; paths are left out on purpose (the same
-  // files in another folder, on another machine, are the same run)
-  std::string text = "ehpt-run-id 1\n";
-  for (const InputFile& f : inputs) text += "input " + f.sha256 + " " + std::to_string(f.bytes) + "\n";
-  for (const CampaignOverride& o : overrides) text += "set " + o.set_text() + "\n";
-  return io::sha256_hex(text);
+  // the overrides as `ehpt run --set` gets them: its summary's provenance.run_id is this id
+  std::vector<std::string> set_texts;
+  for (const CampaignOverride& o : overrides) set_texts.push_back(o.set_text());
+  return hil::run_id(inputs, set_texts);
 }
 
 }  // namespace ehpt::hil

@@ -84,7 +84,8 @@ CampaignRun campaign_run(const Campaign& c, std::uint64_t index);
 
 // A run's content address: SHA-256 over the bytes of every file its scenario reads (in the
 // order read) and its overrides, so that the same inputs give the same id on any machine
-// and in any folder, and one changed byte in a cycle or map gives another id. Pure.
+// and in any folder, and one changed byte in a cycle or map gives another id. Pure; the same
+// id as hil::run_id of the --set texts, which every summary.json records (provenance.run_id).
 std::string run_id(const std::vector<InputFile>& inputs, const std::vector<CampaignOverride>& overrides);
 
 }  // namespace ehpt::hil

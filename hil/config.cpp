@@ -21,6 +21,7 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
   out = Scenario{};
   out.path = path;
   out.name = fs::path(path).stem().string();
+  out.overrides = overrides;
 
   // layers: each --set, the last given first (the last --set of a key wins), then the file
   std::vector<toml::table> set_docs(overrides.size());

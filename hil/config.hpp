@@ -84,6 +84,7 @@ struct Scenario {
   OutputSettings output;
   std::vector<std::string> warnings;  // legal but surprising settings, "file:line: field = value: why"
   std::vector<InputFile> inputs;      // every file read, in the order read, each once
+  std::vector<std::string> overrides; // the --set texts as given ("key=value"), in order
 };
 
 // overrides: "dotted.key=value" as given to --set (value parsed as TOML, else taken as text).

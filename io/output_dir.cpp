@@ -521,6 +521,18 @@ void JsonObject::strings(const std::string& key, const std::vector<std::string>&
   items_.emplace_back(key, raw + "]");
 }
 
+void JsonObject::objects(const std::string& key, const std::vector<JsonObject>& values) {
+  std::string raw = "[";
+  for (std::size_t i = 0; i < values.size(); ++i) raw += (i ? ",\n      " : "\n      ") + values[i].compact();
+  items_.emplace_back(key, raw + (values.empty() ? "]" : "\n    ]"));
+}
+
+std::string JsonObject::compact() const {
+  std::string out = "{";
+  for (std::size_t i = 0; i < items_.size(); ++i) out += (i ? ", " : "") + json_escape(items_[i].first) + ": " + items_[i].second;
+  return out + "}";
+}
+
 std::string JsonObject::str(int indent) const {
   const std::string pad(static_cast<std::size_t>(indent) + 2, ' ');
   std::string out = "{\n";

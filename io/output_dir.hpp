@@ -94,7 +94,9 @@ class JsonObject {
   void null(const std::string& key);
   void object(const std::string& key, const JsonObject& value);
   void strings(const std::string& key, const std::vector<std::string>& values);
+  void objects(const std::string& key, const std::vector<JsonObject>& values);  // one line each
   std::string str(int indent = 0) const;
+  std::string compact() const;  // on one line: {"a": 1, "b": "x"}
 
  private:
   std::vector<std::pair<std::string, std::string>> items_;  // key, raw JSON text

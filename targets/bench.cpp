@@ -55,6 +55,7 @@
 
 #include "hil/config.hpp"
 #include "hil/cvode_reference.hpp"
+#include "hil/provenance.hpp"
 #include "hil/realtime.hpp"
 #include "hil/scenario.hpp"
 #include "hil/simulation.hpp"
@@ -64,9 +65,6 @@
 #include "io/process.hpp"
 #include "io/text_file.hpp"
 
-#ifndef EHPT_SOURCE_DIR
-#define EHPT_SOURCE_DIR ""
-#endif
 
 const char* const kBenchHelp =
     "usage: ehpt bench [--quick] [--out DIR] [--cpu N] [--priority P] [--rt-seconds S] [--quiet]\n"
@@ -984,19 +982,13 @@ void fail(Bench& b, SubRun& r, const std::string& why) {
   b.any_failed = true;
 }
 
-// The commit of the source tree this binary was built from, if it is a git checkout here.
+// The commit this binary was built from (`git describe --dirty` at build time), if any.
 void find_commit(Bench& b) {
-  const std::string src = EHPT_SOURCE_DIR;
-  const std::string git = find_program("git");
-  std::error_code ec;
-  if (src.empty() || git.empty() || !fs::exists(src + "/.git", ec)) return;
-  const Outcome o = run_child({git, "-C", src, "rev-parse", "--short", "HEAD"}, b.logs, "git_rev_parse", 10.0);
-  if (!o.ok()) return;
-  b.commit = trim(read_small_file(b.logs + "/git_rev_parse.out"));
-  // changes not committed (tracked files); no index refresh, so no lock taken in the tree
-  const Outcome s = run_child({git, "--no-optional-locks", "-C", src, "status", "--porcelain", "--untracked-files=no"},
-                              b.logs, "git_status", 10.0);
-  b.dirty = s.ok() && !trim(read_small_file(b.logs + "/git_status.out")).empty();
+  std::string git(ehpt::hil::build_info().git);
+  const std::string suffix = "-dirty";
+  b.dirty = git.size() > suffix.size() && git.compare(git.size() - suffix.size(), suffix.size(), suffix) == 0;
+  if (b.dirty) git.resize(git.size() - suffix.size());
+  b.commit = git;
 }
 
 // (a), (b)

@@ -37,6 +37,7 @@
 #include "hil/bus_ecu.hpp"
 #include "hil/bus_plant.hpp"
 #include "hil/config.hpp"
+#include "hil/provenance.hpp"
 #include "hil/scenario.hpp"
 #include "hil/replay.hpp"
 #include "hil/simulation.hpp"
@@ -101,6 +102,8 @@ const char* kMainHelp =
     "  replay RUN_DIR   run a recorded 'ehpt plant' session again, offline, bit for bit\n"
     "  sweep CAMPAIGN   run a campaign (scenarios x parameters) locally or as a Slurm job array;\n"
     "                   merged results.csv and results.jsonl\n"
+    "\n"
+    "  --version        the version, the git description of the build, the compiler and flags\n"
     "\n"
     "'ehpt <command> --help' gives the options of a command.\n"
     "Exit codes: 0 ok, 1 usage, output or system error, 2 bad input (nothing run), 3 run-time\n"
@@ -873,6 +876,13 @@ int dispatch(std::vector<std::string> args) {
   const std::string cmd = args[0];
   args.erase(args.begin());
   if (cmd == "--help" || cmd == "-h" || cmd == "help") return out(kMainHelp) ? 0 : 1;
+  if (cmd == "--version" || cmd == "version") {
+    if (!args.empty()) {
+      std::cerr << "error: " << cmd << " takes no arguments (got '" << args[0] << "')\n";
+      return 1;
+    }
+    return out(ehpt::hil::version_text()) ? 0 : 1;
+  }
   if (cmd == "run") return cmd_run(args);
   if (cmd == "list") return cmd_list(args);
   if (cmd == "signals") return cmd_signals(args);

@@ -24,6 +24,8 @@
 #include <tuple>
 
 #include "io/csv_table.hpp"
+#include "io/json_value.hpp"
+#include "io/sha256.hpp"
 #include "plant/battery_rig.hpp"
 #include "test_plants.hpp"
 
@@ -401,6 +403,49 @@ TEST(Cli, TwoRunsGiveBitIdenticalTimeseries) {
                           "energy_balance_relative", "wall_time_s", "realtime_factor"}) {
     EXPECT_HAS(summary, std::string("\"") + key + "\": ");
   }
+}
+
+// Provenance: the build and every input file (SHA-256 and size of its bytes), the overrides in
+// order, and the run id a sweep would file the run under.
+TEST(Cli, TheSummaryRecordsTheBuildEveryInputFileAndTheOverrides) {
+  const fs::path out = ehpt::test::scratch_root() / "ehpt_cli_provenance";
+  fs::remove_all(out);
+  const std::string scenario = ehpt::test::source_path("scenarios/ev_sort1.toml");
+  const std::vector<std::string> sets = {"solver.duration_s=5", "vehicle.battery.soc_initial=0.65"};
+  ASSERT_EQ(ehpt_argv({"run", scenario, "--quiet", "--out", out.string(), "--set", sets[0], "--set", sets[1]}).exit_code, 0);
+  ehpt::io::JsonValue summary;
+  std::string error;
+  ASSERT_TRUE(ehpt::io::parse_json(slurp((out / "summary.json").string()), summary, error)) << error;
+  const ehpt::io::JsonValue* p = summary.find("provenance");
+  ASSERT_NE(p, nullptr);
+  const Result version = ehpt("--version");
+  EXPECT_EQ(version.exit_code, 0);
+  EXPECT_HAS(version.out, "ehpt " + p->find("ehpt_version")->text + " ");
+  EXPECT_HAS(version.out, "flags: " + p->find("flags")->text + "\n");
+  EXPECT_HAS(p->find("flags")->text, "-ffp-contract=off");
+  EXPECT_HAS(version.out, "compiler: " + p->find("compiler")->text + "\n");
+  EXPECT_EQ(ehpt("--version extra").exit_code, 1);
+
+  // every file the run read, in the order read, hashed here independently
+  const std::vector<std::string> expected = {scenario, ehpt::test::source_path("vehicles/mbev.toml"),
+                                             ehpt::test::source_path("data/maps/map_evmaps_eff.csv"),
+                                             ehpt::test::source_path("data/cycles/cycle_sort1.csv")};
+  const auto& inputs = p->find("inputs")->items;
+  ASSERT_EQ(inputs.size(), expected.size());
+  std::string id_text = "ehpt-run-id 1\n";
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    EXPECT_EQ(fs::weakly_canonical(inputs[i].find("path")->text), fs::weakly_canonical(expected[i]));
+    const std::string bytes = slurp(expected[i]);
+    EXPECT_EQ(inputs[i].find("sha256")->text, ehpt::io::sha256_hex(bytes)) << expected[i];
+    EXPECT_EQ(inputs[i].find("bytes")->text, std::to_string(bytes.size()));
+    id_text += "input " + ehpt::io::sha256_hex(bytes) + " " + std::to_string(bytes.size()) + "\n";
+  }
+  const auto& overrides = p->find("overrides")->items;
+  ASSERT_EQ(overrides.size(), 2u);
+  EXPECT_EQ(overrides[0].text, sets[0]);
+  EXPECT_EQ(overrides[1].text, sets[1]);
+  for (const std::string& s : sets) id_text += "set " + s + "\n";
+  EXPECT_EQ(p->find("run_id")->text, ehpt::io::sha256_hex(id_text));
 }
 
 TEST(Cli, RunTimeFaultKeepsOutputsAndExitsNonZero) {

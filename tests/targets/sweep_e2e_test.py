@@ -94,6 +94,9 @@ def test_failures(ehpt, tmp):
     rows, header = results(out)
     check([x["sweep_status"] for x in rows] == ["ok", "failed", "ok", "ok"],
           "the invalid variant fails alone, the others run: %s" % [x["sweep_status"] for x in rows])
+    ok_rows = [x for x in rows if x["sweep_status"] == "ok"]
+    check(len(ok_rows) == 3 and all(x["provenance.run_id"] == x["run_id"] for x in ok_rows),
+          "each run's summary.json records the sweep's content hash: provenance.run_id = run_id")
     bad = rows[1]
     check(bad["exit_code"] == "2" and "v.csv:3" in bad["message"] and "soc_initial" in bad["message"],
           "its exit code and message name the CSV line and key: %r" % bad["message"])

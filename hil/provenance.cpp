@@ -1,0 +1,51 @@
+#include "hil/provenance.hpp"
+
+#include "io/sha256.hpp"
+
+namespace ehpt::hil {
+
+std::string version_text() {
+  const BuildInfo& b = build_info();
+  std::string s = "ehpt " + std::string(b.version);
+  s += b.git.empty() ? " (not built from a git checkout)\n" : " (git " + std::string(b.git) + ")\n";
+  s += "compiler: " + std::string(b.compiler) + "\n";
+  s += "build type: " + std::string(b.build_type) + "\n";
+  s += "flags: " + std::string(b.flags) + "\n";
+  return s;
+}
+
+std::string run_id(const std::vector<InputFile>& inputs, const std::vector<std::string>& set_texts) {
+  // a text that names every byte the run depends on
+  std::string text = "ehpt-run-id 1\n";
+  for (const InputFile& f : inputs) text += "input " + f.sha256 + " " + std::to_string(f.bytes) + "\n";
+  for (const std::string& s : set_texts) text += "set " + s + "\n";
+  return io::sha256_hex(text);
+}
+
+io::JsonObject provenance_json(const Scenario& sc) {
+  const BuildInfo& b = build_info();
+  io::JsonObject j;
+  j.text("ehpt_version", std::string(b.version));
+  if (b.git.empty()) {
+    j.null("git");
+  } else {
+    j.text("git", std::string(b.git));
+  }
+  j.text("compiler", std::string(b.compiler));
+  j.text("build_type", std::string(b.build_type));
+  j.text("flags", std::string(b.flags));
+  std::vector<io::JsonObject> inputs;
+  for (const InputFile& f : sc.inputs) {
+    io::JsonObject i;
+    i.text("path", f.path);
+    i.text("sha256", f.sha256);
+    i.integer("bytes", static_cast<long long>(f.bytes));
+    inputs.push_back(std::move(i));
+  }
+  j.objects("inputs", inputs);
+  j.strings("overrides", sc.overrides);
+  j.text("run_id", run_id(sc.inputs, sc.overrides));
+  return j;
+}
+
+}  // namespace ehpt::hil
