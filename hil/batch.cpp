@@ -11,6 +11,7 @@
 #include <memory>
 #include <optional>
 #include <ostream>
+#include <sstream>
 
 #include "hil/alloc_guard.hpp"
 #include "hil/pacer.hpp"
@@ -36,21 +37,8 @@ std::string fault_text(unsigned fault) {
   return s;
 }
 
-namespace {
-
-constexpr std::int64_t kChunkSteps = 50000;
-
-std::string signal_name(int sig) {
-  switch (sig) {
-    case SIGINT: return "SIGINT";
-    case SIGTERM: return "SIGTERM";
-    case SIGHUP: return "SIGHUP";
-    default: return "signal " + std::to_string(sig);
-  }
-}
-
 // The columns of timeseries.csv: the scenario's output.signals, or every signal.
-std::vector<int> chosen_columns(const Scenario& sc, const std::vector<SignalInfo>& signals) {
+std::vector<int> chosen_columns(const Scenario& sc, std::span<const SignalInfo> signals) {
   std::vector<int> columns;
   if (sc.output.signals.empty()) {
     for (std::size_t i = 0; i < signals.size(); ++i) columns.push_back(static_cast<int>(i));
@@ -62,6 +50,19 @@ std::vector<int> chosen_columns(const Scenario& sc, const std::vector<SignalInfo
     }
   }
   return columns;
+}
+
+namespace {
+
+constexpr std::int64_t kChunkSteps = 50000;
+
+std::string signal_name(int sig) {
+  switch (sig) {
+    case SIGINT: return "SIGINT";
+    case SIGTERM: return "SIGTERM";
+    case SIGHUP: return "SIGHUP";
+    default: return "signal " + std::to_string(sig);
+  }
 }
 
 // What the real-time loop did (BatchOptions::realtime), for the summary.
@@ -119,22 +120,55 @@ void append_rows(std::string& text, std::span<const double> rows, std::size_t co
   }
 }
 
-// Runs the simulation in chunks and writes its rows to the CSV between chunks (the run phase
+// Where stream() puts the recorded rows between chunks: timeseries.csv through a text buffer
+// of fixed size (written whenever it fills), ...
+class CsvSink {
+ public:
+  CsvSink(io::TextFileWriter& csv, std::string header, std::size_t columns)
+      : csv_(csv), text_(std::move(header)), columns_(columns) {
+    text_.reserve(kCsvFlushBytes + kMaxNumberChars * columns_ + text_.size());
+  }
+  void add(std::span<const double> rows, TrajectoryHash& hash, std::string& error) {
+    for (std::size_t r = 0; r < rows.size(); r += columns_) {
+      append_rows(text_, rows.subspan(r, columns_), columns_, hash);
+      if (text_.size() >= kCsvFlushBytes) write_text(csv_, text_, error);
+    }
+    write_text(csv_, text_, error);
+  }
+  void close(std::string& error) {
+    if (error.empty()) csv_.close(error);
+  }
+
+ private:
+  io::TextFileWriter& csv_;
+  std::string text_;
+  std::size_t columns_;
+};
+
+// ... or memory (run_in_memory), as the doubles themselves: no text round trip. Null: the
+// rows are only hashed (output.timeseries off).
+class MemorySink {
+ public:
+  explicit MemorySink(std::vector<double>* rows) : rows_(rows) {}
+  void add(std::span<const double> rows, TrajectoryHash& hash, std::string&) {
+    hash.add(rows);
+    if (rows_ != nullptr) rows_->insert(rows_->end(), rows.begin(), rows.end());
+  }
+  void close(std::string&) {}
+
+ private:
+  std::vector<double>* rows_;
+};
+
+// Runs the simulation in chunks and hands its rows to the sink between chunks (the run phase
 // is inside Simulation::run: no I/O there), with the progress line.
-Streamed stream(Simulation& sim, const Scenario& sc, std::string text, std::size_t columns,
-                io::TextFileWriter& csv, const BatchOptions& opt, std::ostream& log) {
+template <class Sink>
+Streamed stream(Simulation& sim, const Scenario& sc, Sink& sink, const BatchOptions& opt, std::ostream& log) {
   Streamed out;
   const auto wall_start = std::chrono::steady_clock::now();
-  text.reserve(kCsvFlushBytes + kMaxNumberChars * columns + text.size());
-  // row by row into the text buffer of fixed size: written whenever it fills
   const auto write_rows = [&] {
-    const auto rows = sim.rows();
-    for (std::size_t r = 0; r < rows.size(); r += columns) {
-      append_rows(text, rows.subspan(r, columns), columns, out.hash);
-      if (text.size() >= kCsvFlushBytes) write_text(csv, text, out.csv_error);
-    }
+    sink.add(sim.rows(), out.hash, out.csv_error);
     sim.clear_rows();
-    write_text(csv, text, out.csv_error);
   };
   start_counting_allocations();
   for (;;) {
@@ -166,7 +200,7 @@ Streamed stream(Simulation& sim, const Scenario& sc, std::string text, std::size
   }
   stop_counting_allocations(out);
   if (opt.progress) log << "\n";
-  if (out.csv_error.empty()) csv.close(out.csv_error);
+  sink.close(out.csv_error);
   out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return out;
 }
@@ -576,7 +610,45 @@ std::string summary_text(const Scenario& sc, const Report& r) {
   return s;
 }
 
+// The exit code, the warnings and the summary of a finished run.
+void conclude(const Scenario& sc, const Report& r, BatchResult& res) {
+  if (r.st.fault != 0) {
+    res.exit_code = 3;
+  } else if (r.run.interrupted_by != 0) {
+    res.exit_code = 128 + r.run.interrupted_by;  // the shell's convention: 130 SIGINT, 143 SIGTERM, 129 SIGHUP
+  }
+  if (!r.audit_closes) res.warnings.push_back(audit_warning(sc, r));
+  if (r.run.realtime) {
+    for (const std::string& w : r.run.realtime->setup.warnings) res.warnings.push_back(w);
+  }
+  std::vector<std::string> warnings = sc.warnings;
+  warnings.insert(warnings.end(), res.warnings.begin(), res.warnings.end());
+  res.summary = summary_json(sc, r, warnings);
+  res.summary_text = summary_text(sc, r);
+}
+
 }  // namespace
+
+MemoryRun run_in_memory(const Scenario& sc, const std::atomic<int>* stop) {
+  MemoryRun res;
+  const std::vector<SignalInfo> signals = scenario_signals(sc);
+  const std::vector<int> columns = chosen_columns(sc, signals);
+  for (const int c : columns) res.columns.emplace_back(signals[static_cast<std::size_t>(c)].name);
+  const std::unique_ptr<Simulation> sim = make_simulation(sc, SimulationOptions{columns, kChunkSteps});
+  if (sc.output.timeseries) {
+    // the rows a whole run records (every decimation-th step and the last), so that the vector
+    // does not grow in the loop; a longer record than 64 Mi values grows as it goes
+    const double rows = static_cast<double>(sim->total_steps()) / static_cast<double>(sc.output.decimation) + 2.0;
+    res.rows.reserve(static_cast<std::size_t>(std::min(rows * static_cast<double>(columns.size()), 64.0 * 1024 * 1024)));
+  }
+  MemorySink sink(sc.output.timeseries ? &res.rows : nullptr);
+  BatchOptions opt;
+  opt.stop_signal = stop;
+  std::ostringstream no_log;  // no progress line, no driver: nothing is written to it
+  const Report r = report_of(*sim, stream(*sim, sc, sink, opt, no_log));
+  conclude(sc, r, res);
+  return res;
+}
 
 // A batch run: columns, the output folder, the simulation streamed to CSV, the summary, the
 // commit. Each step is one of the functions above.
@@ -612,22 +684,11 @@ BatchResult run_batch(const Scenario& sc, const BatchOptions& opt, std::ostream&
     sim_opt.fault_policy = FaultPolicy::kHold;
   }
   const std::unique_ptr<Simulation> sim = make_simulation(sc, sim_opt);
+  CsvSink sink(csv, header, columns.size());
   const Report r = report_of(*sim, opt.realtime != nullptr
                                        ? stream_realtime(*sim, sc, header, columns.size(), csv, opt, log)
-                                       : stream(*sim, sc, header, columns.size(), csv, opt, log));
-  if (r.st.fault != 0) {
-    res.exit_code = 3;
-  } else if (r.run.interrupted_by != 0) {
-    res.exit_code = 128 + r.run.interrupted_by;  // the shell's convention: 130 SIGINT, 143 SIGTERM, 129 SIGHUP
-  }
-  if (!r.audit_closes) res.warnings.push_back(audit_warning(sc, r));
-  if (r.run.realtime) {
-    for (const std::string& w : r.run.realtime->setup.warnings) res.warnings.push_back(w);
-  }
-  std::vector<std::string> warnings = sc.warnings;
-  warnings.insert(warnings.end(), res.warnings.begin(), res.warnings.end());
-  res.summary = summary_json(sc, r, warnings);
-  res.summary_text = summary_text(sc, r);
+                                       : stream(*sim, sc, sink, opt, log));
+  conclude(sc, r, res);
   if (opt.driver != nullptr) opt.driver->report(res.summary, res.summary_text);
 
   if (!r.run.csv_error.empty()) {

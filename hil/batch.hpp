@@ -80,6 +80,16 @@ struct BatchResult {
 
 BatchResult run_batch(const Scenario& scenario, const BatchOptions& options, std::ostream& log);
 
+// The same run as run_batch with the built-in ECU, as fast as possible, into memory: no folder,
+// no file, no progress line (the Python module's ehpt.run). The rows are the doubles
+// timeseries.csv would hold (row-major, the scenario's columns; empty with output.timeseries
+// off), so the summary's trajectory_hash is the CLI's.
+struct MemoryRun : BatchResult {
+  std::vector<std::string> columns;  // signal names, as the CSV header
+  std::vector<double> rows;          // row-major, columns.size() per row
+};
+MemoryRun run_in_memory(const Scenario& scenario, const std::atomic<int>* stop = nullptr);
+
 // Fault bits -> words ("SOC left its window, ...").
 std::string fault_text(unsigned fault);
 

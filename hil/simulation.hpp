@@ -85,5 +85,8 @@ std::unique_ptr<Simulation> load_simulation(const std::string& scenario, const s
                                             const SimulationOptions& options, std::vector<std::string>& errors);
 // The output signals of the scenario's vehicle (ehpt signals, column choice).
 std::vector<SignalInfo> scenario_signals(const Scenario& sc);
+// The columns a run records (timeseries.csv): output.signals in their order, or every signal;
+// indices into signals.
+std::vector<int> chosen_columns(const Scenario& sc, std::span<const SignalInfo> signals);
 
 }  // namespace ehpt::hil

@@ -1,0 +1,131 @@
+#!/usr/bin/python3
+"""Misuse raises a Python exception that says what is wrong, and never crashes the interpreter:
+a scenario that does not load is a ValueError naming each bad key (and its value); a command of
+the wrong vehicle family a TypeError; a step count out of range a ValueError."""
+
+import threading
+import unittest
+
+import ehpt
+from ehpt_test_support import WorkDir
+
+work = None
+
+
+def setUpModule():
+    global work
+    work = WorkDir()
+
+
+def tearDownModule():
+    work.close()
+
+
+class LoadErrors(unittest.TestCase):
+    def assert_value_error(self, scenario, overrides, *words):
+        for call in (lambda: ehpt.run(scenario, set=overrides), lambda: ehpt.Simulation(scenario, set=overrides)):
+            with self.assertRaises(ValueError) as cm:
+                call()
+            for w in words:
+                self.assertIn(w, str(cm.exception))
+
+    def test_unknown_key(self):
+        self.assert_value_error("psecu2_nedc", {"vehicle.ecu.soc_reff": 0.6}, "vehicle.ecu.soc_reff", "unknown key")
+
+    def test_bad_value(self):
+        self.assert_value_error("psecu2_nedc", {"vehicle.ecu.soc_ref": 1.5}, "vehicle.ecu.soc_ref", "1.5", "[0, 1]")
+
+    def test_value_of_the_wrong_type(self):
+        # a str stays a str (the CLI would read --set solver.duration_s=100 as a number)
+        self.assert_value_error("ev_nedc", {"solver.duration_s": "100"}, "solver.duration_s", "must be a number")
+
+    def test_every_problem_is_listed(self):
+        self.assert_value_error("psecu2_nedc", {"vehicle.ecu.soc_reff": 0.6, "solver.step_s": -1.0},
+                                "vehicle.ecu.soc_reff", "solver.step_s", "2 problems")
+
+    def test_unknown_scenario(self):
+        self.assert_value_error("no_such_scenario", None, "no_such_scenario", "no such scenario")
+
+    def test_keys_and_values_python_cannot_pass(self):
+        with self.assertRaises(ValueError) as cm:
+            ehpt.run("ev_nedc", set={"solver.duration_s=5 x": 1})
+        self.assertIn("solver.duration_s=5 x", str(cm.exception))
+        with self.assertRaises(TypeError) as cm:
+            ehpt.run("ev_nedc", set={"solver.duration_s": object()})
+        self.assertIn("solver.duration_s", str(cm.exception))
+        with self.assertRaises(TypeError):
+            ehpt.run("ev_nedc", set={1: 2})
+        with self.assertRaises(TypeError):
+            ehpt.run("ev_nedc", set=[("solver.duration_s", 1)])
+
+    def test_external_ecu_needs_an_ecu(self):
+        with self.assertRaises(ValueError) as cm:
+            ehpt.Simulation("battery_cc_discharge", external_ecu=True)
+        self.assertIn("no ECU", str(cm.exception))
+
+
+class SteppingErrors(unittest.TestCase):
+    def test_step_counts_out_of_range(self):
+        sim = ehpt.Simulation("ev_nedc", set={"solver.duration_s": 10}, chunk_steps=1000)
+        for n in (0, -1, 1001, 2**40, 2**70, -2**70):
+            with self.assertRaises(ValueError, msg=str(n)) as cm:
+                sim.step(n)
+            self.assertIn("[1, 1000]", str(cm.exception))
+        with self.assertRaises(TypeError):
+            sim.step(2.5)
+        self.assertEqual(sim.step_index, 0)  # nothing was stepped
+        self.assertEqual(sim.step(1000), 1000)
+        with self.assertRaises(ValueError):
+            ehpt.Simulation("ev_nedc", chunk_steps=0)
+        with self.assertRaisesRegex(ValueError, "chunk_steps must be in"):
+            ehpt.Simulation("ev_nedc", chunk_steps=10**12)  # not a 10^12-row buffer
+
+    def test_one_call_at_a_time(self):
+        # run() releases the GIL: another thread's call meanwhile is refused, not a data race
+        sim = ehpt.Simulation("psecu2_nedc")
+        worker = threading.Thread(target=sim.run)
+        refused = 0
+        worker.start()
+        while worker.is_alive():
+            try:
+                sim.step_index
+            except RuntimeError as e:
+                self.assertIn("in use by another thread", str(e))
+                refused += 1
+        worker.join()
+        self.assertGreater(refused, 0)
+        self.assertTrue(sim.finished)
+        self.assertEqual(sim.stats()["steps_done"], sim.total_steps)
+
+    def test_wrong_command_type(self):
+        psd = ehpt.Simulation("psecu2_nedc", set={"solver.duration_s": 1}, external_ecu=True)
+        ev = ehpt.Simulation("ev_nedc", set={"solver.duration_s": 1}, external_ecu=True)
+        for sim, wrong, needed in ((psd, ehpt.EvCommand(), "PsdCommand"), (ev, ehpt.PsdCommand(), "EvCommand"),
+                                   (psd, ehpt.PsdSensors(), "PsdCommand"), (ev, 1.0, "EvCommand")):
+            with self.assertRaises(TypeError) as cm:
+                sim.write_command(wrong)
+            self.assertIn(needed, str(cm.exception))
+        psd.write_command(ehpt.PsdCommand(iceON=False))  # the right one is taken
+        ev.write_command(ehpt.EvCommand(driveTauRef_Nm=1.0))
+
+    def test_a_rig_has_no_messages(self):
+        sim = ehpt.Simulation("battery_cc_discharge")
+        self.assertIsNone(sim.ecu_period_steps)
+        with self.assertRaises(TypeError):
+            sim.read_sensors()
+        with self.assertRaises(TypeError):
+            sim.write_command(ehpt.EvCommand())
+
+    def test_message_fields(self):
+        with self.assertRaises(TypeError) as cm:
+            ehpt.PsdCommand(motTauRef=1.0)  # the field is motTauRef_Nm
+        self.assertIn("motTauRef", str(cm.exception))
+        c = ehpt.PsdCommand(motTauRef_Nm=2.0, stamp=ehpt.Stamp(step=7))
+        c.stamp.sequence = 3  # a field of the stamp, in place
+        self.assertEqual((c.motTauRef_Nm, c.iceON, c.stamp.step, c.stamp.sequence), (2.0, True, 7, 3))
+        self.assertIn("motTauRef_Nm=2.0", repr(c))
+        self.assertEqual(ehpt.EvSensors._fields[:2], ("stamp", "driverRequest_Nm"))
+
+
+if __name__ == "__main__":
+    unittest.main()
