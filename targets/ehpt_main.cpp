@@ -823,6 +823,11 @@ int cmd_list(const std::vector<std::string>& args) {
     std::cerr << kListHelp;
     return 1;
   }
+  if (dir.empty()) {
+    std::cerr << "error: no scenarios folder found (looked in " << ehpt::hil::scenarios_search_text()
+              << "); give --dir DIR or set EHPT_SCENARIOS\n";
+    return 1;
+  }
   const auto list = ehpt::hil::list_scenarios(dir);
   if (list.empty()) {
     std::cerr << dir << ": no scenarios (*.toml)\n";
