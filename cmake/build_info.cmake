@@ -15,7 +15,9 @@ if(GIT)
     file(REAL_PATH "${top}" top)
     file(REAL_PATH "${SRC}" src)
     if(top STREQUAL src)
-      execute_process(COMMAND ${GIT} -C ${SRC} describe --always --dirty --abbrev=12
+      # --no-optional-locks: no index refresh written, so a build never holds the work tree's
+      # index lock against the developer's own git commands
+      execute_process(COMMAND ${GIT} --no-optional-locks -C ${SRC} describe --always --dirty --abbrev=12
                       OUTPUT_VARIABLE git RESULT_VARIABLE rc ERROR_QUIET OUTPUT_STRIP_TRAILING_WHITESPACE)
       if(NOT rc EQUAL 0)
         set(git "")

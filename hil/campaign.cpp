@@ -9,7 +9,6 @@
 #include "hil/scenario.hpp"
 #include "io/csv_table.hpp"
 #include "io/number_format.hpp"
-#include "io/sha256.hpp"
 
 namespace fs = std::filesystem;
 

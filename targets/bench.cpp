@@ -65,7 +65,6 @@
 #include "io/process.hpp"
 #include "io/text_file.hpp"
 
-
 const char* const kBenchHelp =
     "usage: ehpt bench [--quick] [--out DIR] [--cpu N] [--priority P] [--rt-seconds S] [--quiet]\n"
     "\n"
