@@ -23,34 +23,41 @@ bool is_dir(const fs::path& p) {
   return fs::is_directory(p, ec);
 }
 
-// The folders the running code is in: the executable's (/proc/self/exe) and, when this code
-// is in a shared object (the Python module), that object's. Real paths: a symbolic link in
-// /usr/local/bin to an installed ehpt finds the installation's data.
-std::vector<fs::path> code_dirs() {
-  std::vector<fs::path> dirs;
+// The folder of the file the running code is in: the executable (/proc/self/exe), or the
+// shared object that holds this code (the Python module; dladdr). Real paths, so a symbolic
+// link in /usr/local/bin to an installed ehpt finds its data.
+struct CodeFile {
+  fs::path dir;
+  bool shared_object = false;
+};
+CodeFile code_file() {
   std::error_code ec;
   const fs::path exe = fs::canonical("/proc/self/exe", ec);
-  if (!ec) dirs.push_back(exe.parent_path());
   Dl_info info{};
-  if (::dladdr(reinterpret_cast<void*>(&code_dirs), &info) != 0 && info.dli_fname != nullptr &&
+  if (::dladdr(reinterpret_cast<void*>(&code_file), &info) != 0 && info.dli_fname != nullptr &&
       info.dli_fname[0] == '/') {
-    const fs::path object = fs::canonical(info.dli_fname, ec);
-    if (!ec && (dirs.empty() || object.parent_path() != dirs.front())) dirs.push_back(object.parent_path());
+    std::error_code e;
+    const fs::path object = fs::canonical(info.dli_fname, e);
+    if (!e && object != exe) return {object.parent_path(), true};
   }
-  return dirs;
+  return {ec ? fs::path() : exe.parent_path(), false};
 }
 
-// <prefix>/<relative> of an installation that holds this code: the code is in <prefix>/bin,
-// or at most three folders below <prefix> (lib/python3/dist-packages); "" if none.
+// The prefix of the installation that holds the running code, by the exact layouts of
+// `cmake --install` (never by climbing further: a copy of ehpt in /tmp/x/bin must not take
+// /tmp/share or /tmp/libexec, which anyone can write): <prefix>/bin/ehpt for the executable,
+// <prefix>/lib/python3/dist-packages/ehpt*.so for the Python module (whose process's
+// executable, /usr/bin/python3, says nothing about ehpt's prefix).
+fs::path code_prefix() {
+  const CodeFile f = code_file();
+  if (f.dir.empty()) return {};
+  return f.shared_object ? f.dir.parent_path().parent_path().parent_path() : f.dir.parent_path();
+}
+
+// <prefix>/<relative> if that folder exists; "" if not.
 std::string installed(const std::string& relative) {
-  for (const fs::path& dir : code_dirs()) {
-    fs::path prefix = dir;
-    for (int up = 0; up < 4 && !prefix.empty(); ++up, prefix = prefix.parent_path()) {
-      if (is_dir(prefix / relative)) return (prefix / relative).string();
-      if (prefix == prefix.root_path()) break;
-    }
-  }
-  return "";
+  const fs::path prefix = code_prefix();
+  return !prefix.empty() && is_dir(prefix / relative) ? (prefix / relative).string() : "";
 }
 
 // The source tree's folder, for a binary that runs from this source tree's build folder
@@ -60,11 +67,10 @@ std::string in_source_tree(const std::string& relative) {
   std::error_code ec;
   const fs::path build = fs::weakly_canonical(EHPT_BINARY_DIR, ec);
   if (ec) return "";
-  for (const fs::path& dir : code_dirs()) {
-    const auto [b, d] = std::mismatch(build.begin(), build.end(), dir.begin(), dir.end());
-    if (b == build.end() && is_dir(fs::path(EHPT_SOURCE_DIR) / relative)) {
-      return (fs::path(EHPT_SOURCE_DIR) / relative).string();
-    }
+  const fs::path dir = code_file().dir;
+  const auto [b, d] = std::mismatch(build.begin(), build.end(), dir.begin(), dir.end());
+  if (b == build.end() && is_dir(fs::path(EHPT_SOURCE_DIR) / relative)) {
+    return (fs::path(EHPT_SOURCE_DIR) / relative).string();
   }
 #else
   (void)relative;
@@ -83,16 +89,16 @@ const char* scenarios_env() {
 std::string scenarios_dir() {
   if (const char* env = scenarios_env()) return env;
   if (is_dir("scenarios")) return "scenarios";
-  // a binary in a build folder uses its own source tree, even below an installed prefix
-  if (std::string dir = in_source_tree("scenarios"); !dir.empty()) return dir;
-  return installed("share/ehpt/scenarios");
+  // an installed ehpt uses its own data (also one installed into a folder of the build tree)
+  if (std::string dir = installed("share/ehpt/scenarios"); !dir.empty()) return dir;
+  return in_source_tree("scenarios");
 }
 
 std::string scenarios_search_text() {
   if (scenarios_env() != nullptr) return "$EHPT_SCENARIOS";
   std::string s = "./scenarios";
+  if (const fs::path prefix = code_prefix(); !prefix.empty()) s += ", " + (prefix / "share/ehpt/scenarios").string();
   if (!in_source_tree("").empty()) s += ", the source tree";
-  for (const fs::path& dir : code_dirs()) s += ", share/ehpt/scenarios up to 3 folders above " + dir.string();
   return s;
 }
 
@@ -156,10 +162,9 @@ std::vector<ScenarioEntry> list_scenarios(const std::string& dir) {
 }
 
 std::string tools_dir() {
-  if (const char* env = std::getenv("EHPT_TOOLS_DIR")) return env;
-  if (std::string dir = in_source_tree("tools"); !dir.empty()) return dir;
+  if (const char* env = std::getenv("EHPT_TOOLS_DIR"); env != nullptr && env[0] != '\0') return env;
   if (std::string dir = installed("libexec/ehpt"); !dir.empty()) return dir;
-  return "/usr/libexec/ehpt";  // named in the error if the plot tool is not there either
+  return in_source_tree("tools");
 }
 
 }  // namespace ehpt::hil

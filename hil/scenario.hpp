@@ -6,9 +6,10 @@
 
 namespace ehpt::hil {
 
-// The scenarios folder: $EHPT_SCENARIOS, else ./scenarios, else, for a binary in the build
-// folder, the source tree's, else the installation's (<prefix>/share/ehpt/scenarios, found
-// from where the running code is); "" if none.
+// The scenarios folder: $EHPT_SCENARIOS (if not empty), else ./scenarios, else the
+// installation's (<prefix>/share/ehpt/scenarios, <prefix> from where the running code is:
+// <prefix>/bin/ehpt or <prefix>/lib/python3/dist-packages/ehpt*.so), else, for a binary in the
+// build folder, the source tree's; "" if none.
 std::string scenarios_dir();
 // Where scenarios_dir() looked, for an error message.
 std::string scenarios_search_text();
@@ -22,8 +23,8 @@ struct ScenarioEntry {
 };
 std::vector<ScenarioEntry> list_scenarios(const std::string& dir);
 
-// The plot tool's folder (plot.py): $EHPT_TOOLS_DIR, else the source tree's tools/ for a
-// binary in the build folder, else <prefix>/libexec/ehpt.
+// The plot tool's folder (plot.py): $EHPT_TOOLS_DIR (if not empty), else <prefix>/libexec/ehpt,
+// else the source tree's tools/ for a binary in the build folder; "" if none.
 std::string tools_dir();
 
 }  // namespace ehpt::hil

@@ -223,7 +223,13 @@ bool wants_help(const std::vector<std::string>& args) {
 bool run_plot_tool(const std::string& src_dir, const std::string& out_dir, const std::string& shown_dir, bool quiet) {
   // a folder named "-x" must not be taken for an option
   const auto safe = [](const std::string& p) { return !p.empty() && p[0] == '-' ? "./" + p : p; };
-  std::vector<std::string> argv = {"/usr/bin/python3", ehpt::hil::tools_dir() + "/plot.py", safe(src_dir),
+  const std::string tools = ehpt::hil::tools_dir();
+  if (tools.empty()) {
+    std::cerr << "error: plotting failed: no plot tool found (not installed in <prefix>/libexec/ehpt next to this "
+                 "ehpt; set EHPT_TOOLS_DIR to the folder of plot.py)\n";
+    return false;
+  }
+  std::vector<std::string> argv = {"/usr/bin/python3", tools + "/plot.py", safe(src_dir),
                                    "--out-dir", safe(out_dir), "--as", shown_dir};
   if (quiet) argv.push_back("--quiet");
   std::string reason;

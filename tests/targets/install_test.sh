@@ -32,7 +32,7 @@ ehpt="$prefix/bin/ehpt"
 cd "$tmp/elsewhere"
 "$ehpt" --version | tee "$tmp/version.txt"
 head -1 "$tmp/version.txt" | grep -q "^ehpt $version" || fail "--version does not say ehpt $version"
-"$ehpt" list >"$tmp/list.txt"
+env -u EHPT_SCENARIOS "$ehpt" list >"$tmp/list.txt"
 grep -q "^psecu2_nedc" "$tmp/list.txt" || fail "the installed ehpt does not list psecu2_nedc"
 
 # the source tree hidden: only the installed files can be read
@@ -84,11 +84,23 @@ EHPT_SCENARIOS="$tmp/myscenarios" "$ehpt" list | grep -q "^ev_mine *mine" || fai
 # an ehpt without data (the binary copied alone): a clear error, exit 1 / 2, nothing run
 mkdir -p "$tmp/lonely/bin" && cp "$ehpt" "$tmp/lonely/bin/ehpt"
 rc=0; EHPT_SCENARIOS= "$tmp/lonely/bin/ehpt" list 2>"$tmp/lonely.err" || rc=$?
-[ "$rc" -eq 1 ] && grep -q "no scenarios folder found (looked in ./scenarios, share/ehpt/scenarios up to 3 folders above $tmp/lonely/bin)" "$tmp/lonely.err" ||
+[ "$rc" -eq 1 ] && grep -qF "no scenarios folder found (looked in ./scenarios, $tmp/lonely/share/ehpt/scenarios)" "$tmp/lonely.err" ||
   { cat "$tmp/lonely.err"; fail "ehpt list without data: rc $rc"; }
 rc=0; "${hidden[@]}" "$tmp/lonely/bin/ehpt" run ev_nedc --out lonely_run 2>"$tmp/lonely.err" || rc=$?
 [ "$rc" -eq 2 ] && grep -q "no scenarios folder found" "$tmp/lonely.err" && [ ! -e lonely_run ] ||
   { cat "$tmp/lonely.err"; fail "ehpt run without data: rc $rc"; }
+
+# only the exact layout <prefix>/bin/ehpt counts: folders further up (anyone may write /tmp)
+# are never searched, for data or for a plot tool to run
+mkdir -p "$tmp/up/a/bin" "$tmp/up/share/ehpt/scenarios" "$tmp/up/libexec/ehpt"
+cp "$ehpt" "$tmp/up/a/bin/ehpt"
+cp "$prefix/share/ehpt/scenarios/ev_nedc.toml" "$tmp/up/share/ehpt/scenarios/"
+printf 'open("%s/planted_ran", "w").close()\n' "$tmp" >"$tmp/up/libexec/ehpt/plot.py"
+rc=0; "$tmp/up/a/bin/ehpt" list 2>"$tmp/up.err" >/dev/null || rc=$?
+[ "$rc" -eq 1 ] || fail "a binary two folders below a share/ehpt took it (ehpt list: rc $rc)"
+rc=0; EHPT_TOOLS_DIR= "$tmp/up/a/bin/ehpt" plot run_installed 2>"$tmp/up.err" || rc=$?
+[ "$rc" -ne 0 ] && [ ! -e "$tmp/planted_ran" ] && grep -q "no plot tool found" "$tmp/up.err" ||
+  { cat "$tmp/up.err"; fail "a plot.py two folders above the binary ran (rc $rc)"; }
 
 echo "== 2. examples/embed against the installed CMake package"
 cmake -S "$src/examples/embed" -B "$tmp/embed" -DCMAKE_PREFIX_PATH="$prefix" >"$tmp/embed-cmake.log" ||
@@ -123,6 +135,15 @@ paths = [i["path"] for i in r.summary["provenance"]["inputs"]]
 assert all(p.startswith(sys.argv[1]) for p in paths), paths
 assert r.exit_code == 0
 print("python: ehpt.run(\"ev_nedc\") from the install,", len(r.timeseries["time_s"]), "rows")
+' "$prefix/share/ehpt/"
+  # the module's own prefix, not the interpreter's: a python3 with another share/ehpt next to it
+  mkdir -p "$tmp/other/bin" "$tmp/other/share/ehpt/scenarios"
+  cp "$(readlink -f /usr/bin/python3)" "$tmp/other/bin/python3"
+  cp "$prefix/share/ehpt/scenarios/ev_nedc.toml" "$tmp/other/share/ehpt/scenarios/"
+  env -u EHPT_SCENARIOS PYTHONPATH="$pymod_dir" "$tmp/other/bin/python3" -c '
+import ehpt, sys
+p = ehpt.run("ev_nedc", set={"solver.duration_s": 5}).summary["provenance"]["inputs"][0]["path"]
+assert p.startswith(sys.argv[1]), f"the module took {p}, not its own prefix {sys.argv[1]}"
 ' "$prefix/share/ehpt/"
 else
   echo "== 3. no Python module in the install (EHPT_BUILD_PYTHON=OFF): skipped"
