@@ -478,7 +478,8 @@ std::string realtime_text(const RealtimeRun& rt) {
   return s;
 }
 
-io::JsonObject summary_json(const Scenario& sc, const Report& r, const std::vector<std::string>& warnings) {
+io::JsonObject summary_json(const Scenario& sc, const Report& r, const std::vector<std::string>& warnings,
+                            const CommandSource& commands) {
   io::JsonObject j;
   const RunStats& st = r.st;
   const MetricTotals& mt = r.mt;
@@ -553,7 +554,7 @@ io::JsonObject summary_json(const Scenario& sc, const Report& r, const std::vect
   j.number("peak_rss_MB", static_cast<double>(peak_rss_bytes()) / (1024.0 * 1024.0));
   if (r.run.realtime) j.object("realtime", realtime_json(*r.run.realtime));
   j.strings("warnings", warnings);
-  j.object("provenance", provenance_json(sc));
+  j.object("provenance", provenance_json(sc, commands));
   return j;
 }
 
@@ -611,7 +612,7 @@ std::string summary_text(const Scenario& sc, const Report& r) {
 }
 
 // The exit code, the warnings and the summary of a finished run.
-void conclude(const Scenario& sc, const Report& r, BatchResult& res) {
+void conclude(const Scenario& sc, const Report& r, const ExternalDriver* driver, BatchResult& res) {
   if (r.st.fault != 0) {
     res.exit_code = 3;
   } else if (r.run.interrupted_by != 0) {
@@ -623,7 +624,7 @@ void conclude(const Scenario& sc, const Report& r, BatchResult& res) {
   }
   std::vector<std::string> warnings = sc.warnings;
   warnings.insert(warnings.end(), res.warnings.begin(), res.warnings.end());
-  res.summary = summary_json(sc, r, warnings);
+  res.summary = summary_json(sc, r, warnings, driver != nullptr ? driver->command_source() : CommandSource{});
   res.summary_text = summary_text(sc, r);
 }
 
@@ -646,7 +647,7 @@ MemoryRun run_in_memory(const Scenario& sc, const std::atomic<int>* stop) {
   opt.stop_signal = stop;
   std::ostringstream no_log;  // no progress line, no driver: nothing is written to it
   const Report r = report_of(*sim, stream(*sim, sc, sink, opt, no_log));
-  conclude(sc, r, res);
+  conclude(sc, r, nullptr, res);
   return res;
 }
 
@@ -688,7 +689,7 @@ BatchResult run_batch(const Scenario& sc, const BatchOptions& opt, std::ostream&
   const Report r = report_of(*sim, opt.realtime != nullptr
                                        ? stream_realtime(*sim, sc, header, columns.size(), csv, opt, log)
                                        : stream(*sim, sc, sink, opt, log));
-  conclude(sc, r, res);
+  conclude(sc, r, opt.driver, res);
   if (opt.driver != nullptr) opt.driver->report(res.summary, res.summary_text);
 
   if (!r.run.csv_error.empty()) {

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "hil/config.hpp"
+#include "hil/provenance.hpp"
 #include "hil/realtime.hpp"
 #include "io/output_dir.hpp"
 
@@ -45,6 +46,8 @@ class ExternalDriver {
   virtual bool flush(std::string& error) = 0;
   // The end: its figures, into summary.json ("bus") and onto the terminal.
   virtual void report(io::JsonObject& summary, std::string& text) const = 0;
+  // summary.json's provenance: where the commands came from (they are not the built-in ECU's).
+  virtual CommandSource command_source() const = 0;
 };
 
 struct BatchOptions {

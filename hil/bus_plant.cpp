@@ -121,6 +121,10 @@ class BusPlant final : public ExternalDriver {
     inputs_buf_.take_handed([&](std::string_view t) { write_inputs(t); });
   }
 
+  CommandSource command_source() const override {
+    return {"external", "external ECU over " + wire_.describe() + ", " + pacing(), {}};
+  }
+
   void report(io::JsonObject& summary, std::string& text) const override {
     io::JsonObject b;
     b.text("transport", wire_.describe());

@@ -22,16 +22,26 @@ struct BuildInfo {
 };
 const BuildInfo& build_info();  // generated at build time (cmake/build_info.cmake)
 
+// What gave the commands when not the scenario's built-in ECU (ExternalDriver): a bus ECU
+// cannot be re-created from the input files, a replay can from its log.
+struct CommandSource {
+  std::string kind;               // "" the built-in ECU (or none, a rig); "external" (a bus ECU); "replay"
+  std::string description;        // for the summary: the transport and pacing, or the log
+  std::vector<InputFile> inputs;  // the files that hold the commands (a replay's inputs.log)
+};
+
 // `ehpt --version`: a few lines.
 std::string version_text();
 
 // The content address of a run: a SHA-256 over the bytes of every input file (their hashes
 // and sizes, in the order read; paths left out, so the same files elsewhere are the same run)
-// and the --set texts, in order.
-std::string run_id(const std::vector<InputFile>& inputs, const std::vector<std::string>& set_texts);
+// and the --set texts, in order; commands: the CommandSource kind ("" adds nothing, so a
+// built-in run's id is the sweep's).
+std::string run_id(const std::vector<InputFile>& inputs, const std::vector<std::string>& set_texts,
+                   const std::string& commands = "");
 
-// summary.json's "provenance": the build, the inputs (path, sha256, bytes), the overrides and
-// the run id.
-io::JsonObject provenance_json(const Scenario& sc);
+// summary.json's "provenance": the build, the inputs (path, sha256, bytes; a replay's log
+// last), the overrides, where the commands came from and the run id.
+io::JsonObject provenance_json(const Scenario& sc, const CommandSource& commands = {});
 
 }  // namespace ehpt::hil

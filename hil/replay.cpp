@@ -36,6 +36,12 @@ class ReplayDriver final : public ExternalDriver {
 
   bool flush(std::string&) override { return true; }
 
+  CommandSource command_source() const override {
+    InputFile f = log_.file;
+    f.path = log_path_;
+    return {"replay", "replay of " + log_path_, {f}};
+  }
+
   void report(io::JsonObject& summary, std::string& text) const override {
     io::JsonObject r;
     r.text("inputs_log", log_path_);

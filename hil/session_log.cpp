@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <sstream>
 
+#include "io/sha256.hpp"
 #include "io/text_file.hpp"
 
 namespace ehpt::hil {
@@ -42,6 +43,7 @@ bool read_inputs_log(const std::string& path, InputsLog& out, std::vector<std::s
     problems.push_back(path + ": " + reason);
     return false;
   }
+  out.file = InputFile{path, io::sha256_hex(text), text.size()};
   std::istringstream in(text);
   std::string line;
   int line_no = 0;

@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "hil/config.hpp"
 #include "msgs/ev.hpp"
 #include "msgs/psd.hpp"
 
@@ -41,6 +42,7 @@ int format_command(char* buf, std::size_t size, std::int64_t step, const msgs::P
 
 // A whole inputs.log, read at start-up.
 struct InputsLog {
+  InputFile file;  // its SHA-256 and size (a replay's provenance)
   std::string scenario_path;
   std::vector<std::string> overrides;
   std::string family;  // "ev" or "psd"

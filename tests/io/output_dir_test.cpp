@@ -1,4 +1,5 @@
 #include "io/output_dir.hpp"
+#include "io/json_value.hpp"
 
 #include <gtest/gtest.h>
 
@@ -232,6 +233,23 @@ TEST(JsonObject, OrderedKeysExactNumbersNullForNan) {
   EXPECT_EQ(j.str(),
             "{\n  \"scenario\": \"ev \\\"x\\\"\",\n  \"step_s\": 0.001,\n  \"bad\": null,\n  \"steps\": 3,\n"
             "  \"ok\": true,\n  \"audit\": {\n    \"a_J\": 1.5\n  }\n}");
+}
+
+// A path in Latin-1 (or any bytes): the summary stays valid JSON that our strict reader
+// takes; well-formed UTF-8 passes through unchanged, every other byte is U+FFFD.
+TEST(JsonObject, BytesThatAreNotUtf8BecomeReplacementCharacters) {
+  EXPECT_EQ(json_escape("caf\xc3\xa9 \xe2\x82\xac \xf0\x9f\x9a\x97"), "\"caf\xc3\xa9 \xe2\x82\xac \xf0\x9f\x9a\x97\"");
+  EXPECT_EQ(json_escape("caf\xe9/x"), "\"caf\\ufffd/x\"");               // Latin-1 e-acute
+  EXPECT_EQ(json_escape("\xc0\xaf"), "\"\\ufffd\\ufffd\"");            // overlong '/'
+  EXPECT_EQ(json_escape("\xed\xa0\x80"), "\"\\ufffd\\ufffd\\ufffd\""); // a surrogate
+  EXPECT_EQ(json_escape("\xf4\x90\x80\x80"), "\"\\ufffd\\ufffd\\ufffd\\ufffd\"");  // above U+10FFFF
+  EXPECT_EQ(json_escape("\xe2\x82"), "\"\\ufffd\\ufffd\"");            // cut short at the end
+  JsonObject j;
+  j.text("path", "/data/caf\xe9\xff.toml");
+  JsonValue v;
+  std::string error;
+  ASSERT_TRUE(parse_json(j.str(), v, error)) << error;
+  EXPECT_EQ(v.find("path")->text, "/data/caf\xef\xbf\xbd\xef\xbf\xbd.toml");
 }
 
 }  // namespace

@@ -1230,6 +1230,19 @@ TEST(CliReplay, ARecordedSessionReplaysBitForBit) {
     EXPECT_EQ(hash_of(a), hash_of(b)) << c.name;
     EXPECT_EQ(json_number(a, "steps"), json_number(b, "steps")) << c.name;
     EXPECT_TRUE(slurp(session + "/timeseries.csv") == slurp(session + "_replay/timeseries.csv")) << c.name;
+    // provenance: the session's commands came from a bus ECU, the replay's from its log, whose
+    // bytes are an input like the scenario's files: neither has a plain run's id
+    ehpt::io::JsonValue ja, jb;
+    std::string error;
+    ASSERT_TRUE(ehpt::io::parse_json(a, ja, error) && ehpt::io::parse_json(b, jb, error)) << error;
+    const ehpt::io::JsonValue &pa = *ja.find("provenance"), &pb = *jb.find("provenance");
+    EXPECT_EQ(pa.find("commands")->text.rfind("external ECU over ", 0), 0u) << pa.find("commands")->text;
+    EXPECT_EQ(pb.find("commands")->text, "replay of " + session + "/inputs.log");
+    const auto& log_input = pb.find("inputs")->items.back();
+    EXPECT_EQ(log_input.find("path")->text, session + "/inputs.log");
+    EXPECT_EQ(log_input.find("sha256")->text, ehpt::io::sha256_hex(log));
+    EXPECT_EQ(pb.find("inputs")->items.size(), pa.find("inputs")->items.size() + 1);
+    EXPECT_NE(pa.find("run_id")->text, pb.find("run_id")->text);
     if (c.interrupt_ms > 0) {
       EXPECT_LT(json_number(a, "steps"), 500000) << "interrupted early";
     }
