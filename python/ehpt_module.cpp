@@ -66,7 +66,8 @@ std::string toml_string(const std::string& s) {
 // array. Anything else is a TypeError naming the key.
 std::string toml_value(const py::handle& v, const std::string& key) {
   if (py::isinstance<py::bool_>(v)) return v.cast<bool>() ? "true" : "false";  // before int: bool is an int
-  if (py::isinstance<py::float_>(v)) return py::repr(v).cast<std::string>();
+  // float(v) first: a subclass (numpy.float64) has its own repr ("np.float64(0.62)")
+  if (py::isinstance<py::float_>(v)) return py::repr(py::float_(v.cast<double>())).cast<std::string>();
   if (py::isinstance<py::int_>(v)) return py::str(v).cast<std::string>();
   if (py::isinstance<py::str>(v)) return toml_string(v.cast<std::string>());
   if (py::isinstance<py::list>(v) || py::isinstance<py::tuple>(v)) {
@@ -87,7 +88,7 @@ std::vector<std::string> overrides_of(const py::object& set) {
     if (!py::isinstance<py::str>(k)) throw py::type_error("set: keys must be str, got " + py::repr(k).cast<std::string>());
     const std::string key = k.cast<std::string>();
     // one key per entry: an '=' would be read as the end of the key
-    if (key.empty() || key.find_first_of("=\r\n") != std::string::npos) {
+    if (key.empty() || key.find_first_of(std::string("=\r\n\0", 4)) != std::string::npos) {
       throw py::value_error("set[" + py::repr(k).cast<std::string>() + "]: not a dotted key (e.g. \"vehicle.ecu.soc_ref\")");
     }
     out.push_back(key + "=" + toml_value(v, key));
@@ -107,6 +108,11 @@ std::string joined(const std::vector<std::string>& lines) {
 // the GIL (it reads files); the errors come back as text, turned into a ValueError by the caller.
 bool load(const std::string& name, const std::vector<std::string>& overrides, hil::Scenario& sc,
           std::vector<std::string>& errors) {
+  // a C string would end at a NUL: "ev_nedc.toml\0junk" must not run ev_nedc.toml
+  if (name.find('\0') != std::string::npos) {
+    errors.push_back("the scenario name contains a NUL character");
+    return false;
+  }
   std::string reason;
   const std::string path = hil::resolve_scenario(name, reason);
   if (path.empty()) {
@@ -116,9 +122,22 @@ bool load(const std::string& name, const std::vector<std::string>& overrides, hi
   return hil::load_scenario(path, overrides, sc, errors);
 }
 
+// Text from files and paths as a Python str: bytes that are not UTF-8 (a Latin-1 folder name)
+// come back as they were (surrogateescape, as Python itself decodes file names), never a
+// UnicodeDecodeError after the run.
+py::str text_of(const std::string& s) {
+  PyObject* o = PyUnicode_DecodeUTF8(s.data(), static_cast<Py_ssize_t>(s.size()), "surrogateescape");
+  if (o == nullptr) throw py::error_already_set();
+  return py::reinterpret_steal<py::str>(o);
+}
+
 [[noreturn]] void throw_load_errors(const std::string& name, const std::vector<std::string>& errors) {
-  throw py::value_error(name + ": " + std::to_string(errors.size()) + (errors.size() == 1 ? " problem" : " problems") +
-                        "; nothing was run:\n" + joined(errors));
+  std::string shown = name;  // a NUL would end the message there
+  for (std::size_t at = shown.find('\0'); at != std::string::npos; at = shown.find('\0', at)) shown.replace(at, 1, "\\0");
+  const std::string text = shown + ": " + std::to_string(errors.size()) + (errors.size() == 1 ? " problem" : " problems") +
+                           "; nothing was run:\n" + joined(errors);
+  PyErr_SetObject(PyExc_ValueError, text_of(text).ptr());
+  throw py::error_already_set();
 }
 
 // ---- results -------------------------------------------------------------------------------
@@ -145,7 +164,7 @@ struct RunResult {
   py::dict timeseries;    // name -> float64 array
   int exit_code = 0;      // 0 ok, 3 run-time fault (outputs kept), 128 + signal interrupted
   py::list warnings;
-  std::string text;       // the lines `ehpt run` prints
+  py::str text;           // the lines `ehpt run` prints
 };
 
 RunResult run(const std::string& scenario, const py::object& set) {
@@ -165,8 +184,8 @@ RunResult run(const std::string& scenario, const py::object& set) {
   for (const auto& c : mr.columns) r.columns.append(c);
   r.timeseries = columns_of(mr.columns, mr.rows);
   r.exit_code = mr.exit_code;
-  for (const auto& w : mr.warnings) r.warnings.append(w);
-  r.text = mr.summary_text;
+  for (const auto& w : mr.warnings) r.warnings.append(text_of(w));
+  r.text = text_of(mr.summary_text);
   return r;
 }
 
@@ -195,7 +214,13 @@ class MessageClass {
                  if (std::find(names.begin(), names.end(), key) == names.end()) {
                    throw py::type_error(cls + "() has no field '" + key + "'");
                  }
-                 self.attr(k) = v;
+                 try {
+                   self.attr(k) = v;
+                 } catch (py::error_already_set& e) {  // pybind's own message does not name the field
+                   const std::string value = py::str(py::repr(v));
+                   const std::string type = py::str(py::type::of(self.attr(k)).attr("__name__"));
+                   throw py::type_error(cls + "." + key + ": " + value + " is not a " + type);
+                 }
                }
                return value;
              }),

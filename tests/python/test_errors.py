@@ -125,6 +125,27 @@ class SteppingErrors(unittest.TestCase):
         self.assertEqual((c.motTauRef_Nm, c.iceON, c.stamp.step, c.stamp.sequence), (2.0, True, 7, 3))
         self.assertIn("motTauRef_Nm=2.0", repr(c))
         self.assertEqual(ehpt.EvSensors._fields[:2], ("stamp", "driverRequest_Nm"))
+        with self.assertRaises(TypeError) as cm:
+            ehpt.PsdCommand(motTauRef_Nm="x")  # a field of the wrong type is named, with its value
+        self.assertIn("PsdCommand.motTauRef_Nm: 'x'", str(cm.exception))
+
+    def test_a_nul_in_the_name_runs_nothing(self):
+        # a C string would end at the NUL and run ev_nedc.toml
+        for name in ("ev_nedc\0junk", "no_such\0zzz"):
+            with self.assertRaises(ValueError) as cm:
+                ehpt.run(name, set={"solver.duration_s": 1})
+            self.assertIn(name.replace("\0", "\\0"), str(cm.exception))
+            self.assertIn("NUL", str(cm.exception))
+
+    def test_a_float_subclass_is_its_float(self):
+        # numpy.float64's repr is "np.float64(...)" with numpy 2: the value, not the repr, is sent
+        class F(float):
+            def __repr__(self):
+                return "F(%s)" % float.__repr__(self)
+
+        r = ehpt.run("ev_nedc", set={"solver.duration_s": F(2.5)})
+        self.assertEqual(r.summary["provenance"]["overrides"], ["solver.duration_s=2.5"])
+        self.assertEqual(r.summary["steps"], 2500)
 
 
 if __name__ == "__main__":
