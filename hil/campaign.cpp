@@ -20,25 +20,6 @@ using detail::node_text;
 
 namespace {
 
-std::string toml_string(const std::string& v) {
-  std::string out = "\"";
-  for (const char c : v) {
-    const auto u = static_cast<unsigned char>(c);
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (u < 0x20 || u == 0x7f) {
-      static const char* hex = "0123456789ABCDEF";
-      out += "\\u00";
-      out += hex[u >> 4];
-      out += hex[u & 15];
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
-}
-
 // A value of the grid or [set] as --set text, so that it reads back as the same TOML value
 // (floats as the shortest text that reads back exactly). "" if it is not a scalar.
 std::string value_text(const toml::node& n) {

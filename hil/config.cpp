@@ -13,6 +13,25 @@ namespace ehpt::hil {
 
 using namespace detail;
 
+std::string toml_string(const std::string& v) {
+  std::string out = "\"";
+  for (const char c : v) {
+    const auto u = static_cast<unsigned char>(c);
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (u < 0x20 || u == 0x7f) {
+      static const char* hex = "0123456789ABCDEF";
+      out += "\\u00";
+      out += hex[u >> 4];
+      out += hex[u & 15];
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
 const char* solver_name(SolverKind k) { return k == SolverKind::kRk4 ? "rk4" : "implicit-euler"; }
 
 bool load_scenario(const std::string& path, const std::vector<std::string>& overrides, Scenario& out,

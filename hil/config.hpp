@@ -87,6 +87,10 @@ struct Scenario {
   std::vector<std::string> overrides; // the --set texts as given ("key=value"), in order
 };
 
+// A text as a TOML basic string, quotes and backslashes escaped, control characters as \u00XX:
+// an override's value that must stay a string (a campaign's, the Python module's).
+std::string toml_string(const std::string& text);
+
 // overrides: "dotted.key=value" as given to --set (value parsed as TOML, else taken as text).
 bool load_scenario(const std::string& path, const std::vector<std::string>& overrides, Scenario& out,
                    std::vector<std::string>& errors);

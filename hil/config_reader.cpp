@@ -67,18 +67,6 @@ bool parse_toml(const std::string& path, toml::table& out, Context& ctx, const F
   return false;
 }
 
-namespace {
-std::string toml_quote(const std::string& v) {
-  std::string out = "\"";
-  for (char c : v) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
-  }
-  return out + "\"";
-}
-
-}  // namespace
-
 // "a.b.c=value": the value is parsed as TOML (number, bool, quoted string, array), or taken as text.
 bool parse_override(const std::string& text, toml::table& out, Context& ctx) {
   const auto eq = text.find('=');
@@ -105,7 +93,7 @@ bool parse_override(const std::string& text, toml::table& out, Context& ctx) {
     out = toml::parse(key + " = " + value, label);
   } catch (const toml::parse_error&) {
     try {
-      out = toml::parse(key + " = " + toml_quote(value), label);
+      out = toml::parse(key + " = " + toml_string(value), label);
     } catch (const toml::parse_error& e) {
       ctx.errors.push_back(label + ": cannot parse: " + std::string(e.description()));
       return false;

@@ -41,26 +41,6 @@ namespace {
 
 // ---- set={...}: Python values -> the CLI's --set key=value text -----------------------------
 
-// A TOML basic string: a Python str stays a string (the CLI would read "0.5" as a number).
-std::string toml_string(const std::string& s) {
-  std::string out = "\"";
-  for (const char c : s) {
-    const auto u = static_cast<unsigned char>(c);
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (u < 0x20 || u == 0x7f) {
-      static const char* const kHex = "0123456789ABCDEF";
-      out += "\\u00";
-      out += kHex[u >> 4];
-      out += kHex[u & 15];
-    } else {
-      out += c;  // UTF-8 passes through (TOML is UTF-8)
-    }
-  }
-  return out + "\"";
-}
-
 // The value as TOML text: bool -> true/false, int -> digits, float -> repr() (the shortest text
 // that reads back as the same double; inf and nan are TOML too), str -> quoted, list/tuple ->
 // array. Anything else is a TypeError naming the key.
@@ -69,7 +49,7 @@ std::string toml_value(const py::handle& v, const std::string& key) {
   // float(v) first: a subclass (numpy.float64) has its own repr ("np.float64(0.62)")
   if (py::isinstance<py::float_>(v)) return py::repr(py::float_(v.cast<double>())).cast<std::string>();
   if (py::isinstance<py::int_>(v)) return py::str(v).cast<std::string>();
-  if (py::isinstance<py::str>(v)) return toml_string(v.cast<std::string>());
+  if (py::isinstance<py::str>(v)) return hil::toml_string(v.cast<std::string>());  // a str stays a string: the CLI would read "0.5" as a number
   if (py::isinstance<py::list>(v) || py::isinstance<py::tuple>(v)) {
     std::string out = "[";
     for (const py::handle item : v) out += (out.size() > 1 ? ", " : "") + toml_value(item, key);
