@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // AMDrive's operating point (plant/am_drive.hpp): the algebraic solve each step will pay.
 #include <benchmark/benchmark.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The CAN codec, per frame: encode (sensor message -> frames), and the receive side (check,
 // counter, apply). Google Benchmark; the figures are in the README ("Speed").
 #include <benchmark/benchmark.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The time-domain references (plant/machine_test_rigs.hpp) against the quasi-static drives
 // they check: what resolving the electrical period costs, per step and per simulated second.
 // cpu_s_per_sim_s: CPU seconds per simulated second (the rig at its scenario's step, 5 us;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Lockstep SIL over LCM memq (one process, one thread: the ECU answers inside its LCM
 // handler): ECU periods per second and the plant's round trip, next to the udpm and
 // socketcand figures of tools/bus_bench.sh.
@@ -5,9 +6,9 @@
 
 #include <vector>
 
-#include "hil/bus_plant.hpp"
-#include "hil/config.hpp"
-#include "hil/simulation.hpp"
+#include "hil/bus/bus_plant.hpp"
+#include "hil/config/config.hpp"
+#include "hil/run/simulation.hpp"
 #include "io/lcm/lcm_bus.hpp"
 #include "io/lcm/lcm_codec.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Speed of the plants (Google Benchmark; figures, never test assertions).
 //   BM_BevStep/<solver>:  one fixed step of the map-based EV (NEDC, h = 1 ms): sensing, the
 //                         follower ECU and stepper.advance
@@ -12,8 +13,8 @@
 //                         solved at every RK4 stage; EvAm_bat: the equivalent circuit)
 #include <benchmark/benchmark.h>
 
-#include "hil/config.hpp"
-#include "hil/runner.hpp"
+#include "hil/config/config.hpp"
+#include "hil/run/runner.hpp"
 #include "plant/bev_plant.hpp"
 #include "plant/drive_rigs.hpp"
 #include "plant/ev_machine_plant.hpp"

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # Writes hil's generated build_info.cpp (cmake -P, at every build): the version, the git
 # description of the source tree and the compiler and flags, for `ehpt --version` and every
 # summary.json. configure_file rewrites the file only when its text changes, so an unchanged

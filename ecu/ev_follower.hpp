@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The EV's built-in ECU: the driver-follower. The driver (PropDriver, part of the plant) asks
 // for a torque at the drive shaft; this ECU passes it to the drive as its torque reference,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Power-split ECUs MBecu1, MBecu1soc, MBecu2 (library Ecu1/Ecu2/Ecu3, V3 PsdEcu1/2/3),
 // MODELS.md §5. Paper: P15 §5.2 (rules 1-6), Fig. 21.

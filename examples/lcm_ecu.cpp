@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // A minimal external ECU for ehpt's EV plant over LCM, written against the generated types
 // (io/lcm/*.lcm) and liblcm's C++ API only: no ehpt code. It is what `ehpt ecu` does for an
 // EV, reduced to the contract, so it can be the starting point of an ECU of one's own:

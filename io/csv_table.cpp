@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "io/csv_table.hpp"
 
 #include "io/number_format.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Numeric CSV tables with a header row, as in data/ (cycles, maps). Start-up only.
 // Blank lines and lines starting with '#' are skipped; a UTF-8 byte-order mark is ignored;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Text a real-time loop produces (bus.log, inputs.log) and another thread writes: two buffers
 // reserved at start-up. The loop appends to the active one; when it holds `threshold` bytes

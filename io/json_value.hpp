@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Reading ehpt's own summary.json files back (written by io::JsonObject), so that thousands
 // of run summaries can be merged into one CSV. Start-up / tool code: allocates freely.

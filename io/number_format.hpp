@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Text for numbers in outputs: the shortest decimal that reads back to the same double, so
 // a CSV is exact and two identical runs give byte-identical files.

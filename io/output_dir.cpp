@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "io/output_dir.hpp"
 
 #include <dirent.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // An output folder that never looks complete before it is, and never touches what is not
 // ours (README "--out"):

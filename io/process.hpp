@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Starting a helper program (the plot tool) without a shell: the arguments go to the program
 // as a vector, so no character in a path can be taken as a command.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // SHA-256 (FIPS 180-4), so that ehpt can name the exact input files of a run (cycles, maps,
 // vehicles) by their digest, as `sha256sum` does, without a crypto library. Not for secrets:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Reading input files at start-up without surprises: only regular files (a FIFO, a device
 // such as /dev/zero or a folder is refused before it is read, so the loader cannot hang),

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Messages of the battery-electric vehicle (MBEV, MODELS.md §10.3). The driver (PropDriver)
 // is part of the plant, as the person at the wheel; the ECU turns the driver's request into

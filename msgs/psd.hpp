@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Messages of the power-split hybrid (MODELS.md §0.5; P15 §5.2): names as in the library's
 // bus ("Conn"), with the unit appended.

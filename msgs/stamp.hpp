@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The messages the plant and its ECU exchange (a leaf library: plant/, ecu/ and io/ include
 // it, it includes nothing of ehpt). Per vehicle family one sensor message (plant -> ECU) and

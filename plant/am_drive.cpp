@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "plant/am_drive.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // AMDrive and AMDrivePU: the quasi-stationary induction-machine drive, MODELS.md §9.2 (P15 §2:
 // AMDrive = "uContrGen" + QSAsma + lossF). Pure functions of (slip or torque request, rotor

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Battery with one RC block: Batt1 / Batt1Conn, MODELS.md §6. Paper: P15 §4 (E = E0 + E1*SOC).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Battery test rig: the Batt1 pack of MODELS.md §6 (BatteryRc) on a profile of constant-current
 // and constant-power segments, vehicle kind "battery_rig"; it lets a constant-current discharge

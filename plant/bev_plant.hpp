@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Battery-electric vehicle with a map-based one-flange drive: MBEV, MODELS.md §10.3
 // (tutorial §4), built from PropDriver (§8), OneFlange (§1), Batt1 (§6), DragForce (§7) and

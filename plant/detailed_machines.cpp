@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "plant/detailed_machines.hpp"
 
 namespace ehpt::plant {

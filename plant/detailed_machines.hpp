@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Time-domain ("detailed") machine models: the references the quasi-stationary drives of
 // MODELS.md §9 are compared with (P15 §2 compares its quasi-stationary drives with time-domain

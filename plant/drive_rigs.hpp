@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Test rigs for the map-based drives, MODELS.md §11.1 and §11.3.
 // Paper: P15 §3, "TestMBOneFlange", Figs. 11-13.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "plant/ev_machine_plant.hpp"
 
 #include <cmath>

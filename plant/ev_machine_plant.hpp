@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Battery-electric vehicles with a physics-based machine drive: EvPm_bat (PMDrive, MODELS.md
 // §10.1, P15 §5.1, Figs. 18-20) and EvAm_bat (AMDrive, §10.2). The same vehicle as the

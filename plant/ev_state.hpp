@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // What the battery-electric vehicles share beyond their components: the map-based EV
 // (bev_plant.hpp) and the machine-drive EVs (ev_machine_plant.hpp) have one state layout,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "plant/machine_test_rigs.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // TestPMDrive and TestAMDrive: the quasi-static drives of MODELS.md §9 next to the
 // time-domain machines of plant/detailed_machines.hpp, fed as P15 §2 describes, on one

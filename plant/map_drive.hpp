@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Map-based electric drive (inverter + machine), MODELS.md §1 (one flange) and §2 (two flanges).
 // Paper: P15 §3 "MBOneFlange", "MBTwoFlange", Figs. 10-13.

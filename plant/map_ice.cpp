@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "plant/map_ice.hpp"
 
 namespace ehpt::plant {

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Map-based internal-combustion engine: MBice / IceT / IceP / IceConnP / IceConnPOO,
 // MODELS.md §3. Paper: P15 §3 ("MBice"), §5.2.

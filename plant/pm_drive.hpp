@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // PMDrive: the quasi-static permanent-magnet synchronous machine drive, MODELS.md §9.1
 // (P15 §2, eqs. 1-2, Fig. 5). Pure functions of (torque request, speed, DC voltage): the

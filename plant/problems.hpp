@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Load-time validation results. Every validate() in plant/ appends to a Problems list
 // instead of stopping at the first error, so a user sees every mistake in one run.

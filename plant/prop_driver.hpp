@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // PropDriver: proportional driver on a speed profile, MODELS.md §8. Paper: P15 §5.1.
 //   v_ref(t) = Cycle(t)                (linear in time; repeated stamps = steps; end value held)

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Power-split hybrid (PSecu1/2/3 of the library, the paper's "PSecu2" example), MODELS.md
 // §4 and §10.4. Paper: P15 §5.2, Figs. 21-23.

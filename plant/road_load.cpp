@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "plant/road_load.hpp"
 
 namespace ehpt::plant {

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Road load: DragForce and DragForceAngle, MODELS.md §7. Paper: P15 §4, eq. (3), Fig. 20.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Named output signals of a plant. Each plant lists its Outputs fields with their column
 // name (unit suffix included), so the runner can write any chosen subset without knowing
@@ -17,7 +18,7 @@ struct Signal {
   std::string_view meaning;   // one line for the README and `ehpt run --help`
 };
 
-// The outputs a vehicle's run metrics are computed from (hil/metrics.hpp), declared by each
+// The outputs a vehicle's run metrics are computed from (hil/run/metrics.hpp), declared by each
 // plant (static constexpr kMetrics), never inferred from the names of its output fields. A
 // null member: the vehicle has no such quantity (a rig has no speed, an EV no engine).
 template <class Outputs>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Interpolation tables with the semantics of the library's CombiTable blocks (MODELS.md §0.4).
 //

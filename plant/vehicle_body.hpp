@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The longitudinal vehicle body both vehicles share (MODELS.md §7): road load and grade (§7.1,
 // §7.3), the friction brake, the stick/slip modes (§7.2), and the body's own states.

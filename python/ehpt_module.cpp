@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The Python module `ehpt` (issue 13 item 5): a thin pybind11 binding of the Simulation facade.
 //
 //   ehpt.run(scenario, set=None) -> RunResult      the CLI's `ehpt run`, into memory
@@ -26,10 +27,10 @@
 
 #include "ecu/ev_follower.hpp"
 #include "ecu/psd_ecu.hpp"
-#include "hil/batch.hpp"
-#include "hil/config.hpp"
-#include "hil/scenario.hpp"
-#include "hil/simulation.hpp"
+#include "hil/run/batch.hpp"
+#include "hil/config/config.hpp"
+#include "hil/config/scenario.hpp"
+#include "hil/run/simulation.hpp"
 #include "msgs/ev.hpp"
 #include "msgs/psd.hpp"
 #include "msgs/stamp.hpp"

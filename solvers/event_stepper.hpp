@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Fixed-grid stepping with zero-crossing events (STYLE.md §6, MODELS.md §12).
 //

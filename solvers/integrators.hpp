@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Fixed-step integrators over a plant (STYLE.md §6; the contract: solvers/plant.hpp).
 // Modes and inputs are held constant over a step. Both integrators own their scratch, so a

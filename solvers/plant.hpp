@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The written contract between a plant and everything that steps it (STYLE.md §4-§6). The
 // integrators, the event stepper and the runner take only types that satisfy these concepts,

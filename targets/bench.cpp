@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // `ehpt bench`: the timing and determinism suite (targets/bench.hpp). Everything it runs
 // outside its own process is this binary (/proc/self/exe) or cyclictest, started with an
 // argument vector (never a shell), in a process group of its own, waited for with a
@@ -53,12 +54,12 @@
 #include <string_view>
 #include <vector>
 
-#include "hil/config.hpp"
-#include "hil/cvode_reference.hpp"
-#include "hil/provenance.hpp"
-#include "hil/realtime.hpp"
-#include "hil/scenario.hpp"
-#include "hil/simulation.hpp"
+#include "hil/config/config.hpp"
+#include "hil/reference/cvode_reference.hpp"
+#include "hil/diag/provenance.hpp"
+#include "hil/run/realtime.hpp"
+#include "hil/config/scenario.hpp"
+#include "hil/run/simulation.hpp"
 #include "io/json_value.hpp"
 #include "io/number_format.hpp"
 #include "io/output_dir.hpp"

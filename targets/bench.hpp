@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // `ehpt bench`: the timing and determinism benchmark suite in one command (targets/bench.cpp).
 // In one run on one machine it measures (a) ns per step of each vehicle x solver at 1 ms,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // ehpt: command-line entry point. Batch (as fast as possible) runs of scenario files, and the
 // plant and its ECU on a CAN bus.
 //   ehpt run SCENARIO [--out DIR] [--set key=value ...] [--plot] [--quiet]
@@ -33,14 +34,14 @@
 #include <system_error>
 #include <vector>
 
-#include "hil/batch.hpp"
-#include "hil/bus_ecu.hpp"
-#include "hil/bus_plant.hpp"
-#include "hil/config.hpp"
-#include "hil/provenance.hpp"
-#include "hil/scenario.hpp"
-#include "hil/replay.hpp"
-#include "hil/simulation.hpp"
+#include "hil/run/batch.hpp"
+#include "hil/bus/bus_ecu.hpp"
+#include "hil/bus/bus_plant.hpp"
+#include "hil/config/config.hpp"
+#include "hil/diag/provenance.hpp"
+#include "hil/config/scenario.hpp"
+#include "hil/bus/replay.hpp"
+#include "hil/run/simulation.hpp"
 #include "io/can/bus_spec.hpp"
 #include "io/can/contract.hpp"
 #include "io/lcm/lcm_bus.hpp"

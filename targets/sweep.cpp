@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // `ehpt sweep`: a campaign's runs, each an `ehpt run` child (so a run that fails, or even
 // crashes, fails alone), from a local process pool or from the tasks of a Slurm job array,
 // into a folder that says what is done:
@@ -9,7 +10,7 @@
 //   DIR/results.csv, .jsonl   merged: one row per run of the campaign as it is now
 //   DIR/slurm/                the job-array script, the queue of its runs, the tasks' output
 //
-// A run's id is its content address (hil/campaign.hpp): running the campaign again skips
+// A run's id is its content address (hil/campaign/campaign.hpp): running the campaign again skips
 // every run with a status, and a changed input file or value gives new ids, so exactly the
 // affected runs run again. Nothing outside DIR is written; nothing in DIR is removed.
 
@@ -34,8 +35,8 @@
 
 #include <toml++/toml.h>
 
-#include "hil/campaign.hpp"
-#include "hil/config.hpp"
+#include "hil/campaign/campaign.hpp"
+#include "hil/config/config.hpp"
 #include "io/json_value.hpp"
 #include "io/number_format.hpp"
 #include "io/output_dir.hpp"
@@ -54,7 +55,7 @@ const char* const kSweepHelp =
     "       ehpt sweep --status DIR\n"
     "\n"
     "Runs every run of a campaign (campaigns/*.toml: scenarios x [grid] x variants; the format\n"
-    "is in hil/campaign.hpp and the README, \"Campaigns\") as 'ehpt run' and merges the\n"
+    "is in hil/campaign/campaign.hpp and the README, \"Campaigns\") as 'ehpt run' and merges the\n"
     "summaries into DIR/results.csv and DIR/results.jsonl (one row per run: its id, scenario\n"
     "and swept values, then every summary.json key). A run's id is a hash of the bytes of\n"
     "every file it reads and of its overrides: the campaign again into the same DIR runs only\n"

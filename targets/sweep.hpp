@@ -1,5 +1,6 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
-// `ehpt sweep`: a SIL campaign (hil/campaign.hpp) over scenarios x parameters, run by a local
+// `ehpt sweep`: a SIL campaign (hil/campaign/campaign.hpp) over scenarios x parameters, run by a local
 // process pool or as a Slurm job array, resumable, merged into results.csv and results.jsonl
 // (targets/sweep.cpp).
 

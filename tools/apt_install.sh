@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # apt-get installs those of the given Debian packages that are missing (as root, or with sudo).
 # usage: tools/apt_install.sh LABEL PACKAGE...   (LABEL names the caller in its message)
 set -euo pipefail

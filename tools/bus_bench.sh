@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Bus timing figures (a benchmark, not a test: the machine's load moves them):
 #   lockstep SIL over socketcand on loopback: ECU periods per second, round trip p50/p99/max;
 #   the wall-clock pacer's period error (lateness of each step's wake-up) at 1 ms and 10 ms.

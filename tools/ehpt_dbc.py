@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """A tiny reader of ehpt's CAN contract (io/can/ehpt.dbc), standard library only.
 
 It reads the BO_ (message) and SG_ (signal) lines and nothing else, and it knows only what

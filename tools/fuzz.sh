@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Fuzzes a loader with libFuzzer (clang, ASan + UBSan) for a while.
 # usage: tools/fuzz.sh [csv|scenario] [SECONDS]     (defaults: csv, 60 s)
 # Installs clang when missing, builds into build-fuzz/ (never build/), fuzzes a writable copy of

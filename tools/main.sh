@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # The main job: install what is missing, build, and run the paper's PSecu2 (power-split hybrid
 # with MBecu2) on NEDC as two processes over the CAN contract: `ehpt plant` and `ehpt ecu`
 # (MBecu2) in lockstep over socketcand on 127.0.0.1. Prints the plant's summary, runs the same

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Mutation test: plants each defect of tools/mutants.txt, one at a time, into a private copy of
 # the tree (build-mutate/src; the working tree is never touched), rebuilds, runs the whole
 # test suite, and counts the defects the suite catches ("killed").

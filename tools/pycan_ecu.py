@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: BSD-3-Clause
 """An example ECU for the ehpt plant on a CAN bus, with python-can (a starting point for HIL).
 
 The bus contract is io/can/ehpt.dbc. Once per ECU period the plant sends its sensor frames and

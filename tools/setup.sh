@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Installs what is missing (Debian 12 packages) and builds ehpt in Release into build/.
 # Sourced by tools/main.sh and tools/test.sh; safe to run again (only missing packages are
 # installed, the build is incremental). Extra CMake options: EHPT_CMAKE_ARGS="...".

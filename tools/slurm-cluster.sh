@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Starts and stops a throw-away one-node Slurm cluster (munged + slurmctld + slurmd) living
 # entirely in one folder, for end-to-end tests of `ehpt sweep --executor slurm`.
 #

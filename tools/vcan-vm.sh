@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Runs one command where a real SocketCAN vcan0 exists, even on a host kernel without CAN.
 #
 # usage: tools/vcan-vm.sh [--out DIR] [--timeout SECONDS] -- COMMAND [ARGS...]

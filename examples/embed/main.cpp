@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // A vehicle of ehpt driven by an ECU of one's own, in one's own C++ harness: load the
 // installed ev_nedc scenario without its built-in ECU, and once per ECU period read the
 // sensors, compute the command and write it, then step the plant to the next sample.
@@ -16,8 +17,8 @@
 #include <string>
 #include <vector>
 
-#include "hil/config.hpp"
-#include "hil/simulation.hpp"
+#include "hil/config/config.hpp"
+#include "hil/run/simulation.hpp"
 #include "msgs/ev.hpp"
 
 namespace {

@@ -1,4 +1,5 @@
-#include "hil/bus_ecu.hpp"
+// SPDX-License-Identifier: BSD-3-Clause
+#include "hil/bus/bus_ecu.hpp"
 
 #include <memory>
 #include <ostream>
@@ -6,9 +7,9 @@
 
 #include "ecu/ev_follower.hpp"
 #include "ecu/psd_ecu.hpp"
-#include "hil/bus_family.hpp"
-#include "hil/bus_wire_lcm.hpp"
-#include "hil/pacer.hpp"
+#include "hil/bus/bus_family.hpp"
+#include "hil/bus/bus_wire_lcm.hpp"
+#include "hil/run/pacer.hpp"
 #include "io/can/codec.hpp"
 #include "io/lcm/lcm_codec.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A built-in ECU (MBecu1/MBecu1soc/MBecu2, the EV's follower) as its own process on the bus
 // (`ehpt ecu`): it speaks the contract (io/can/ehpt.dbc) like any external ECU. Per sample it
@@ -10,7 +11,7 @@
 #include <iosfwd>
 #include <string>
 
-#include "hil/config.hpp"
+#include "hil/config/config.hpp"
 #include "io/can/transport.hpp"
 #include "io/lcm/lcm_bus.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // What each vehicle family brings to a bus (CAN or LCM): its messages, its CAN frames, its
 // safe command.

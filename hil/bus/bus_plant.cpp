@@ -1,4 +1,5 @@
-#include "hil/bus_plant.hpp"
+// SPDX-License-Identifier: BSD-3-Clause
+#include "hil/bus/bus_plant.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -6,13 +7,13 @@
 #include <cstdio>
 #include <span>
 
-#include "hil/bus_family.hpp"
-#include "hil/bus_wire_can.hpp"
-#include "hil/bus_wire_lcm.hpp"
-#include "hil/histogram.hpp"
-#include "hil/pacer.hpp"
-#include "hil/session_log.hpp"
-#include "hil/simulation.hpp"
+#include "hil/bus/bus_family.hpp"
+#include "hil/bus/bus_wire_can.hpp"
+#include "hil/bus/bus_wire_lcm.hpp"
+#include "hil/run/histogram.hpp"
+#include "hil/run/pacer.hpp"
+#include "hil/bus/session_log.hpp"
+#include "hil/run/simulation.hpp"
 #include "io/handoff_buffer.hpp"
 #include "io/number_format.hpp"
 
@@ -20,7 +21,7 @@ namespace ehpt::hil {
 
 namespace {
 
-// The plant's side of a bus, over a Wire (hil/bus_wire_can.hpp, hil/bus_wire_lcm.hpp): the
+// The plant's side of a bus, over a Wire (hil/bus/bus_wire_can.hpp, hil/bus/bus_wire_lcm.hpp): the
 // pacing (lockstep, wall clock), the samples, the staleness timeout and safe state, the
 // figures. The wire moves samples out and commands in.
 template <class Sensors, class Wire>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The plant on a CAN bus (`ehpt plant`): the scenario's vehicle without its built-in ECU; an
 // ECU outside (another process, a python-can script, a real ECU) reads the sensor frames and
@@ -21,8 +22,8 @@
 #include <string>
 #include <vector>
 
-#include "hil/batch.hpp"
-#include "hil/config.hpp"
+#include "hil/run/batch.hpp"
+#include "hil/config/config.hpp"
 #include "io/can/transport.hpp"
 #include "io/lcm/lcm_bus.hpp"
 
@@ -38,7 +39,7 @@ struct BusPlantOptions {
   double peer_wait_s = 60.0;  // wall time to wait for an ECU to connect before t = 0
   std::string log_interface = "can0";  // the interface name in bus.log lines
   std::string lcm_prefix = "EHPT_";    // LCM: channels <prefix>PLANT_STATUS, <prefix>ECU_COMMAND
-  // inputs.log's header (hil/session_log.hpp): what `ehpt replay` loads again
+  // inputs.log's header (hil/bus/session_log.hpp): what `ehpt replay` loads again
   std::string scenario_path;
   std::vector<std::string> overrides;
 };

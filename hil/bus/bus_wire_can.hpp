@@ -1,5 +1,6 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
-// The CAN side of the bus plant (hil/bus_plant.cpp): a sample goes out as the frames of
+// The CAN side of the bus plant (hil/bus/bus_plant.cpp): a sample goes out as the frames of
 // io/can/ehpt.dbc, a command comes in as its frames, checked by the codec's rules; every frame
 // in and out goes to bus.log (candump -L). Run phase: no allocation (fixed buffers).
 
@@ -9,7 +10,7 @@
 #include <span>
 #include <string>
 
-#include "hil/bus_family.hpp"
+#include "hil/bus/bus_family.hpp"
 #include "io/can/candump_log.hpp"
 #include "io/can/codec.hpp"
 #include "io/can/transport.hpp"

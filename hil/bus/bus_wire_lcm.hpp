@@ -1,5 +1,6 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
-// The LCM side of the bus plant (hil/bus_plant.cpp): a sample goes out as one message on
+// The LCM side of the bus plant (hil/bus/bus_plant.cpp): a sample goes out as one message on
 // <prefix>PLANT_STATUS (sensors and status, doubles), a command comes in as one message on
 // <prefix>ECU_COMMAND. A command is taken if it decodes, answers a sample no older than the
 // freshness allows (lockstep: the current one), and is newer than the last one taken (a
@@ -13,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "hil/bus_family.hpp"
+#include "hil/bus/bus_family.hpp"
 #include "io/lcm/lcm_bus.hpp"
 #include "io/lcm/lcm_codec.hpp"
 #include "io/output_dir.hpp"

@@ -1,9 +1,10 @@
-#include "hil/replay.hpp"
+// SPDX-License-Identifier: BSD-3-Clause
+#include "hil/bus/replay.hpp"
 
 #include <algorithm>
 #include <vector>
 
-#include "hil/simulation.hpp"
+#include "hil/run/simulation.hpp"
 
 namespace ehpt::hil {
 

@@ -1,4 +1,5 @@
-#include "hil/session_log.hpp"
+// SPDX-License-Identifier: BSD-3-Clause
+#include "hil/bus/session_log.hpp"
 
 #include <cerrno>
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Record and replay of a bus session (issue 11 §4). A wall-clock or real-time `ehpt plant`
 // session depends on when the ECU's commands arrived; the plant writes every command it
@@ -22,7 +23,7 @@
 #include <string>
 #include <vector>
 
-#include "hil/config.hpp"
+#include "hil/config/config.hpp"
 #include "msgs/ev.hpp"
 #include "msgs/psd.hpp"
 

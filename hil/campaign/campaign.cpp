@@ -1,12 +1,13 @@
-#include "hil/campaign.hpp"
+// SPDX-License-Identifier: BSD-3-Clause
+#include "hil/campaign/campaign.hpp"
 
 #include <algorithm>
 #include <filesystem>
 #include <set>
 
-#include "hil/config_reader.hpp"
-#include "hil/provenance.hpp"
-#include "hil/scenario.hpp"
+#include "hil/config/config_reader.hpp"
+#include "hil/diag/provenance.hpp"
+#include "hil/config/scenario.hpp"
 #include "io/csv_table.hpp"
 #include "io/number_format.hpp"
 

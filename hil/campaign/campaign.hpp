@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A SIL campaign (campaigns/*.toml): base scenarios x a grid of overrides x a list of
 // variants, expanded into runs with content-addressed ids. Start-up only; `ehpt sweep`
@@ -23,7 +24,7 @@
 #include <string>
 #include <vector>
 
-#include "hil/config.hpp"
+#include "hil/config/config.hpp"
 
 namespace ehpt::hil {
 

@@ -1,10 +1,11 @@
-#include "hil/config.hpp"
+// SPDX-License-Identifier: BSD-3-Clause
+#include "hil/config/config.hpp"
 
 #include <cmath>
 #include <filesystem>
 
-#include "hil/config_reader.hpp"
-#include "hil/vehicle_kinds.hpp"
+#include "hil/config/config_reader.hpp"
+#include "hil/config/vehicle_kinds.hpp"
 #include "io/number_format.hpp"
 
 namespace fs = std::filesystem;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Scenario and vehicle files (TOML) -> validated parameters. Start-up only.
 //

@@ -1,4 +1,5 @@
-#include "hil/config_components.hpp"
+// SPDX-License-Identifier: BSD-3-Clause
+#include "hil/config/config_components.hpp"
 
 #include <array>
 #include <string_view>

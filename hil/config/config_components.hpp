@@ -1,10 +1,11 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Readers of the component tables a vehicle file is made of ([vehicle], [road], [drive],
 // [battery], [driver], [brake], [ice], the ECU's timing), shared by the vehicle kinds.
 // Start-up only.
 
-#include "hil/config.hpp"
-#include "hil/config_reader.hpp"
+#include "hil/config/config.hpp"
+#include "hil/config/config_reader.hpp"
 #include "plant/bev_plant.hpp"
 #include "plant/map_ice.hpp"
 #include "plant/am_drive.hpp"

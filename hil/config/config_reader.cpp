@@ -1,10 +1,11 @@
-#include "hil/config_reader.hpp"
+// SPDX-License-Identifier: BSD-3-Clause
+#include "hil/config/config_reader.hpp"
 
 #include <algorithm>
 #include <filesystem>
 #include <sstream>
 
-#include "hil/toml_guard.hpp"
+#include "hil/config/toml_guard.hpp"
 #include "io/number_format.hpp"
 #include "io/sha256.hpp"
 #include "io/text_file.hpp"

@@ -1,6 +1,7 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The layered TOML reader behind load_scenario, shared by the scenario loader, the component
-// readers (hil/config_components.hpp) and each vehicle kind's reader (hil/vehicles.cpp).
+// readers (hil/config/config_components.hpp) and each vehicle kind's reader (hil/kinds/registry.cpp).
 // Start-up only. Every problem is collected with the file and line its value came from.
 
 #include <filesystem>
@@ -13,7 +14,7 @@
 
 #include <toml++/toml.h>
 
-#include "hil/config.hpp"
+#include "hil/config/config.hpp"
 #include "io/csv_table.hpp"
 #include "plant/problems.hpp"
 #include "plant/table.hpp"
@@ -55,7 +56,7 @@ struct Context {
   std::set<std::string> failed_tables;  // fields whose file could not be read: no follow-on problems
 
   std::set<std::string> reported;  // fields with a problem already: validate() need not repeat it
-  // every file read, in the order read (each once): what the run depends on (hil/config.hpp)
+  // every file read, in the order read (each once): what the run depends on (hil/config/config.hpp)
   std::vector<InputFile> inputs;
   void read_file(const std::string& path, const std::string& content);
 

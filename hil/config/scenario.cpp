@@ -1,4 +1,5 @@
-#include "hil/scenario.hpp"
+// SPDX-License-Identifier: BSD-3-Clause
+#include "hil/config/scenario.hpp"
 
 #include <dlfcn.h>
 
@@ -9,7 +10,7 @@
 
 #include <toml++/toml.h>
 
-#include "hil/toml_guard.hpp"
+#include "hil/config/toml_guard.hpp"
 #include "io/text_file.hpp"
 
 namespace fs = std::filesystem;

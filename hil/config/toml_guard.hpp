@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A guard in front of toml++ (start-up only). toml++ 3.3 recurses once per part of a dotted
 // key (a.b.c = 1, [a.b.c], {a.b.c = 1}) with no limit, so a key of ~31 000 parts - a 62 kB

@@ -1,5 +1,6 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
-// Reading a vehicle file, kind by kind (start-up only; hil/vehicles.cpp holds the readers
+// Reading a vehicle file, kind by kind (start-up only; hil/kinds/registry.cpp holds the readers
 // with the kinds' factories). load_scenario reads the scenario, finds the kind named by the
 // vehicle file's `kind` and lets it read its tables into the Scenario.
 
@@ -8,8 +9,8 @@
 #include <string_view>
 #include <vector>
 
-#include "hil/config.hpp"
-#include "hil/config_reader.hpp"
+#include "hil/config/config.hpp"
+#include "hil/config/config_reader.hpp"
 
 namespace ehpt::hil::detail {
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The allocation guard: heap allocations counted at the malloc level, for the whole process,
 // between arm() and disarm(); in a debug build (or with EHPT_ABORT_ON_ALLOC=1) the first one
@@ -11,10 +12,10 @@
 // are not heap allocations and are not counted.
 //
 // Two pieces, so that a library can use the API without taking the hooks:
-//  * this API (hil/alloc_guard_api.cpp, part of ehpt_hil): the flag, the counter, arm/disarm,
+//  * this API (hil/diag/alloc_guard_api.cpp, part of ehpt_hil): the flag, the counter, arm/disarm,
 //    the report of the first allocation. Without the hooks it does nothing: active() is false,
 //    count() stays 0.
-//  * the hooks (hil/alloc_hooks.cpp, CMake target ehpt_alloc_guard): the interposed malloc
+//  * the hooks (hil/diag/alloc_hooks.cpp, CMake target ehpt_alloc_guard): the interposed malloc
 //    family and operator new/delete, forwarding to glibc's own allocator (__libc_malloc...).
 //    Only an executable that links ehpt_alloc_guard has them (the ehpt CLI,
 //    alloc_guard_tests); ehpt_hil, the other tests and the fuzzers do not. Not to be combined
@@ -107,7 +108,7 @@ bool abort_on_allocation_by_default();
 // one thread at a time. Does not allocate (safe while armed).
 const char* describe_first();
 
-// For the hooks (hil/alloc_hooks.cpp) only. The state is constant-initialised, so the hooks
+// For the hooks (hil/diag/alloc_hooks.cpp) only. The state is constant-initialised, so the hooks
 // can read it from the first allocation of the process, before any static constructor runs.
 namespace detail {
 extern constinit std::atomic<bool> g_armed;

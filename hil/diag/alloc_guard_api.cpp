@@ -1,12 +1,13 @@
-// The allocation guard's state and API (see hil/alloc_guard.hpp). Part of ehpt_hil: it never
-// references the hooks (hil/alloc_hooks.cpp), which find this state instead, so a binary
+// SPDX-License-Identifier: BSD-3-Clause
+// The allocation guard's state and API (see hil/diag/alloc_guard.hpp). Part of ehpt_hil: it never
+// references the hooks (hil/diag/alloc_hooks.cpp), which find this state instead, so a binary
 // without the hooks links and simply counts nothing.
 //
 // Everything reached from an allocation (detail::on_allocation and what it calls) runs inside
 // malloc: it must not allocate, throw or take a lock that an allocation could be holding. It
 // uses atomics, fixed buffers, write(2), glibc's backtrace() (preloaded by arm()),
 // backtrace_symbols_fd() and dladdr() (neither allocates).
-#include "hil/alloc_guard.hpp"
+#include "hil/diag/alloc_guard.hpp"
 
 #include <dlfcn.h>
 #include <execinfo.h>

@@ -1,4 +1,5 @@
-// The allocation guard's hooks (see hil/alloc_guard.hpp): the malloc family and every global
+// SPDX-License-Identifier: BSD-3-Clause
+// The allocation guard's hooks (see hil/diag/alloc_guard.hpp): the malloc family and every global
 // operator new/delete, interposed for the whole process (glibc lets a program replace malloc:
 // libc's own strdup/fopen, libstdc++, liblcm and glib all call these), each noting the call
 // (alloc_guard::detail::note_allocation: one relaxed load while disarmed) and forwarding to
@@ -13,7 +14,7 @@
 // Safe before main: the state they read is constant-initialised (no constructor to wait for),
 // and while disarmed they only forward. No dlsym (which can allocate), no recursion: they call
 // __libc_* directly, never the replaced names; what on_allocation does is in
-// hil/alloc_guard_api.cpp. Compiled with -fno-builtin (CMake), so that the compiler does not
+// hil/diag/alloc_guard_api.cpp. Compiled with -fno-builtin (CMake), so that the compiler does not
 // turn code here into a call to the function being defined.
 #include <malloc.h>
 
@@ -22,7 +23,7 @@
 #include <cstdlib>
 #include <new>
 
-#include "hil/alloc_guard.hpp"
+#include "hil/diag/alloc_guard.hpp"
 
 #ifndef EHPT_ALLOC_ABORT_DEFAULT
 #define EHPT_ALLOC_ABORT_DEFAULT 0

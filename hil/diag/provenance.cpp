@@ -1,4 +1,5 @@
-#include "hil/provenance.hpp"
+// SPDX-License-Identifier: BSD-3-Clause
+#include "hil/diag/provenance.hpp"
 
 #include "io/sha256.hpp"
 

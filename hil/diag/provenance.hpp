@@ -1,14 +1,15 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Provenance: what made a result. The ehpt build (version, git description, compiler, flags)
 // and, per run, the SHA-256 of every input file and the --set overrides, so that a
 // summary.json can be traced to its code and inputs and the run re-created exactly. The run
-// id is the one a sweep files the run under (hil/campaign.hpp): one function makes both.
+// id is the one a sweep files the run under (hil/campaign/campaign.hpp): one function makes both.
 
 #include <string>
 #include <string_view>
 #include <vector>
 
-#include "hil/config.hpp"
+#include "hil/config/config.hpp"
 #include "io/output_dir.hpp"
 
 namespace ehpt::hil {

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // battery_rig: Batt1 (MODELS.md §6) on a current / power profile.
 #include "hil/kinds/kind.hpp"
 

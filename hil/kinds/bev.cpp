@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bev: the map-based EV (MODELS.md §10.3) with its built-in ECU, the driver-follower.
 #include "hil/kinds/kind.hpp"
 

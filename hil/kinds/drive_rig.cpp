@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // drive_rig: TestMBOneFlange / TestTwoFlange (MODELS.md §11.1, §11.3).
 #include "hil/kinds/kind.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // ev_pm, ev_am: the EVs with machine-physics drives (MODELS.md §10.1, §10.2) and the EV's
 // built-in ECU, the driver-follower. The same messages as the map-based EV, so they run with
 // the follower, over CAN and over LCM alike.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "hil/kinds/kind.hpp"
 
 namespace ehpt::hil::kinds {

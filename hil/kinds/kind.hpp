@@ -1,5 +1,6 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
-// What a vehicle kind is made of (start-up only): its entry in the table of hil/vehicles.cpp
+// What a vehicle kind is made of (start-up only): its entry in the table of hil/kinds/registry.cpp
 // {name, reader, factory, signals}, and the helpers the kinds share. One file per kind in
 // hil/kinds/ defines its entry.
 
@@ -8,10 +9,10 @@
 #include <string_view>
 #include <vector>
 
-#include "hil/codec_ecu.hpp"
-#include "hil/config_components.hpp"
-#include "hil/simulation_of.hpp"
-#include "hil/vehicle_kinds.hpp"
+#include "hil/run/codec_ecu.hpp"
+#include "hil/config/config_components.hpp"
+#include "hil/run/simulation_of.hpp"
+#include "hil/config/vehicle_kinds.hpp"
 #include "solvers/integrators.hpp"
 
 namespace ehpt::hil::kinds {

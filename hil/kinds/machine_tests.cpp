@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // pm_drive_test, am_drive_test: TestPMDrive / TestAMDrive, the quasi-static drives next to
 // their time-domain references (MODELS.md §9, §11.6; plant/machine_test_rigs.hpp).
 #include "hil/kinds/kind.hpp"

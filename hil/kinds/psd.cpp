@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // psd: the power-split hybrid (MODELS.md §4, §10.4) with MBecu1 / MBecu1soc / MBecu2.
 #include "hil/kinds/kind.hpp"
 

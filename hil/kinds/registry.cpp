@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The table of vehicle kinds: one entry each, defined in hil/kinds/<kind>.cpp
 // {name, reader, factory, signals}. This is the only place that maps a vehicle file's `kind`
 // and a scenario's parameters to C++ types; load_scenario, the CLI and the batch runner go
@@ -5,7 +6,7 @@
 #include <string>
 
 #include "hil/kinds/kind.hpp"
-#include "hil/scenario.hpp"
+#include "hil/config/scenario.hpp"
 #include "plant/battery_rig.hpp"
 #include "plant/bev_plant.hpp"
 #include "plant/drive_rigs.hpp"

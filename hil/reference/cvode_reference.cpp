@@ -1,6 +1,7 @@
-// The CVODE reference (hil/cvode_reference.hpp): one driver template over (Plant, ECU) that
+// SPDX-License-Identifier: BSD-3-Clause
+// The CVODE reference (hil/reference/cvode_reference.hpp): one driver template over (Plant, ECU) that
 // reproduces the runner's discrete-time semantics between CVODE restarts.
-#include "hil/cvode_reference.hpp"
+#include "hil/reference/cvode_reference.hpp"
 
 #include <cvode/cvode.h>
 #include <nvector/nvector_serial.h>
@@ -19,7 +20,7 @@
 
 #include "ecu/ev_follower.hpp"
 #include "ecu/psd_ecu.hpp"
-#include "hil/codec_ecu.hpp"
+#include "hil/run/codec_ecu.hpp"
 #include "plant/bev_plant.hpp"
 #include "plant/ev_machine_plant.hpp"
 #include "plant/psd_plant.hpp"

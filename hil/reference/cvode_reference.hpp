@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A variable-step reference for the fixed-step runs: the same plant equations, the same
 // built-in ECU and the same events, integrated by SUNDIALS CVODE (BDF, dense Newton, rtol
@@ -7,7 +8,7 @@
 // recorder, no pacer, no bus). Its own library (ehpt_reference) so that the core does not
 // depend on SUNDIALS.
 //
-// The discrete-time semantics are the runner's (hil/runner.hpp), reproduced exactly:
+// The discrete-time semantics are the runner's (hil/run/runner.hpp), reproduced exactly:
 //   - the ECU samples at t_n = n h for n a multiple of solver.ecu_ratio: plant.sense(t_n, ...)
 //     with the state, modes and inputs there, then update(sensors, command) with the command
 //     starting as a copy of the inputs; the command applies latency_steps later (0: at once)
@@ -30,8 +31,8 @@
 #include <cstdint>
 #include <string>
 
-#include "hil/config.hpp"
-#include "hil/simulation.hpp"
+#include "hil/config/config.hpp"
+#include "hil/run/simulation.hpp"
 
 namespace ehpt::hil {
 

@@ -1,4 +1,5 @@
-#include "hil/batch.hpp"
+// SPDX-License-Identifier: BSD-3-Clause
+#include "hil/run/batch.hpp"
 
 #include <pthread.h>
 #include <time.h>
@@ -13,12 +14,12 @@
 #include <ostream>
 #include <sstream>
 
-#include "hil/alloc_guard.hpp"
-#include "hil/pacer.hpp"
-#include "hil/provenance.hpp"
-#include "hil/row_queue.hpp"
-#include "hil/simulation.hpp"
-#include "hil/trajectory_hash.hpp"
+#include "hil/diag/alloc_guard.hpp"
+#include "hil/run/pacer.hpp"
+#include "hil/diag/provenance.hpp"
+#include "hil/run/row_queue.hpp"
+#include "hil/run/simulation.hpp"
+#include "hil/run/trajectory_hash.hpp"
 #include "io/number_format.hpp"
 #include "io/text_file.hpp"
 
@@ -97,7 +98,7 @@ void write_text(io::TextFileWriter& csv, std::string& text, std::string& error) 
   text.clear();
 }
 
-// The allocation guard (hil/alloc_guard.hpp) counts from the end of start-up to the end of
+// The allocation guard (hil/diag/alloc_guard.hpp) counts from the end of start-up to the end of
 // the loop, every thread of the process included (the writer thread, the bus).
 void start_counting_allocations() {
   alloc_guard::reset();

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A whole batch run of one scenario: build the plant, run it as fast as possible in chunks,
 // stream timeseries.csv, write summary.json, commit the output folder. Start-up and
@@ -9,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "hil/config.hpp"
-#include "hil/provenance.hpp"
-#include "hil/realtime.hpp"
+#include "hil/config/config.hpp"
+#include "hil/diag/provenance.hpp"
+#include "hil/run/realtime.hpp"
 #include "io/output_dir.hpp"
 
 namespace ehpt::hil {

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The built-in ECU as a bus ECU sees the plant: with ecu.codec = "can", the sensor message is
 // encoded into the contract's frames and decoded again before the ECU reads it, and its

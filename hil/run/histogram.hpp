@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A latency histogram in whole microseconds, preallocated at start-up (record() neither
 // allocates nor locks): timing figures of the bus pacers (round trips, period errors).

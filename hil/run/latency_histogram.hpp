@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A histogram of durations in nanoseconds with a fixed relative resolution (log-linear bins,
 // as HdrHistogram lays them out): values below 128 ns are exact, above that each power of two

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Run metrics over every grid point of a run (run phase: no allocation), from the outputs a
 // vehicle declares in Plant::kMetrics (plant/signals.hpp):

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Pacers: when the runner may take the next step. Every pacer gives the same trajectory; they
 // differ only in waiting. The timing logic is a pure function (tick_after) so that it is
@@ -16,7 +17,7 @@
 #include <cstdint>
 #include <thread>
 
-#include "hil/latency_histogram.hpp"
+#include "hil/run/latency_histogram.hpp"
 
 namespace ehpt::hil {
 

@@ -1,4 +1,5 @@
-#include "hil/realtime.hpp"
+// SPDX-License-Identifier: BSD-3-Clause
+#include "hil/run/realtime.hpp"
 
 #include <malloc.h>
 #include <pthread.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The real-time loop's set-up on Linux (start-up only): SCHED_FIFO for the calling thread,
 // CPU affinity, memory locked and prefaulted. Each step that is not permitted is a warning

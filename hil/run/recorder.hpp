@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The rows a run records: chosen columns of the outputs at every decimation-th grid point,
 // plus row 0, the last step and a fault step, into a buffer sized at start-up for one chunk

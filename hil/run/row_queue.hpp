@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A single-producer, single-consumer queue of recorded rows (fixed column count), preallocated
 // at start-up: the real-time loop pushes each tick's rows without waiting, allocating or

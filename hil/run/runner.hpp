@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The runner core (STYLE.md §8): per step the controller port (sensors -> ECU -> command,
 // with its period and latency), advance() on the fixed grid t0 + n h, the outputs, and small
@@ -20,9 +21,9 @@
 #include <type_traits>
 #include <vector>
 
-#include "hil/metrics.hpp"
-#include "hil/pacer.hpp"
-#include "hil/recorder.hpp"
+#include "hil/run/metrics.hpp"
+#include "hil/run/pacer.hpp"
+#include "hil/run/recorder.hpp"
 #include "msgs/stamp.hpp"
 #include "plant/signals.hpp"
 #include "solvers/event_stepper.hpp"

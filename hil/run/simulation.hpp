@@ -1,7 +1,8 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Simulation: one loaded scenario, ready to step, behind one type-erased interface (the CLI,
 // the batch runner and later the Python module use it; none of them knows the vehicle's C++
-// type). Each vehicle kind registers once (hil/vehicles.cpp): its factory and its signals;
+// type). Each vehicle kind registers once (hil/kinds/registry.cpp): its factory and its signals;
 // a new kind touches that table and nothing else that runs.
 
 #include <atomic>
@@ -12,9 +13,9 @@
 #include <string_view>
 #include <vector>
 
-#include "hil/config.hpp"
-#include "hil/metrics.hpp"
-#include "hil/runner.hpp"
+#include "hil/config/config.hpp"
+#include "hil/run/metrics.hpp"
+#include "hil/run/runner.hpp"
 #include "msgs/ev.hpp"
 #include "msgs/psd.hpp"
 #include "plant/signals.hpp"

@@ -1,12 +1,13 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The one implementation of Simulation, over a plant type, its integrator and its built-in
-// ECU (hil/vehicles.cpp instantiates it once per vehicle kind and solver). Start-up only
+// ECU (hil/kinds/registry.cpp instantiates it once per vehicle kind and solver). Start-up only
 // here; the stepping is Runner's.
 
 #include <memory>
 #include <vector>
 
-#include "hil/simulation.hpp"
+#include "hil/run/simulation.hpp"
 
 namespace ehpt::hil {
 

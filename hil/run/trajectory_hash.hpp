@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A trajectory's fingerprint: 64-bit FNV-1a over the bits of every recorded value, in order.
 // Two runs with the same hash recorded the same rows bit for bit (as their timeseries.csv,

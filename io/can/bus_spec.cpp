@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "io/can/bus_spec.hpp"
 
 #include "io/can/socketcan.hpp"

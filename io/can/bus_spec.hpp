@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // --bus on the command line: which transport, where.
 //   socketcan:IFACE            a SocketCAN interface (vcan0, can0)

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // candump -L log lines, "(1700000000.123456) vcan0 123#1122334455667788": what can-utils'
 // candump -L writes and canplayer reads, and what python-can's CanutilsLogReader reads. Pure.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The CAN codec: pure functions from the messages (msgs/) to frames of the contract
 // (io/can/contract.hpp, io/can/ehpt.dbc) and back. No I/O, no heap, no exceptions.

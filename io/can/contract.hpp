@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The bus contract in C++: every frame and signal of io/can/ehpt.dbc, as constant tables. A
 // test (tests/io/can_codec_test.cpp) parses the DBC and compares every signal's start bit,

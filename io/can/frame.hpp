@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A classic CAN frame as it travels between the plant and its ECU (io/can: no plant types).
 

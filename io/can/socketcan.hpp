@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // SocketCAN transport: one raw CAN socket (PF_CAN, SOCK_RAW, CAN_RAW) bound to one interface
 // (can0 on a real bus, vcan0 in tests). Linux only.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // socketcand endpoints (the TCP text protocol of linux-can/socketcand, raw mode), so that
 // python-can's interface="socketcand" and other socketcand clients reach the plant on

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A CAN transport: how frames reach the other side (SocketCAN raw socket, a socketcand TCP
 // endpoint, an in-memory pair for tests). Owned by the target, never called from plant code.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "io/lcm/lcm_bus.hpp"
 
 #include <fcntl.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // One LCM instance for a provider URL (udpm://239.255.76.67:7667?ttl=0 on a network,
 // memq:// inside one process), owned by the target and never called from plant code.

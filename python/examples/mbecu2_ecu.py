@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: BSD-3-Clause
 """MBecu2 (and MBecu1, MBecu1soc) in Python: the built-in power-split ECU of ecu/psd_ecu.cpp,
 written again as an ECU of your own would be, and run in process against the plant.
 

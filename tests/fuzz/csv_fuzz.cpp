@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Fuzz harness for io::read_csv_table: the input bytes are a CSV file.
 // Any bytes must give an answer (true, or false with messages), never a crash, a hang or an
 // exception: the call is made without try/catch so that an escaping exception is a finding.

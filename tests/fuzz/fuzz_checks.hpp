@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // What both harnesses do with a loader's answer: print it on request, and treat a broken
 // promise of the loader's header like a crash (abort, so that libFuzzer saves the input).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Fuzz harness for hil::load_scenario. The first input byte picks what the rest of the input is:
 //   'v'  a vehicle TOML file, loaded by a fixed scenario with the SORT1 cycle (bev, psd)
 //   'r'  a vehicle TOML file, loaded by a fixed scenario without a cycle (drive rigs)
@@ -26,7 +27,7 @@
 #include <vector>
 
 #include "fuzz_checks.hpp"
-#include "hil/config.hpp"
+#include "hil/config/config.hpp"
 
 namespace {
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // main() for the fuzz harnesses when the compiler has no libFuzzer (the g++ build CI uses), so
 // that every build runs them as a ctest smoke test. It runs LLVMFuzzerTestOneInput over every
 // file of the corpus folders given, then over N mutations of them made by a fixed-seed xorshift

@@ -1,4 +1,5 @@
-// The allocation guard (hil/alloc_guard.hpp) with its hooks linked (ehpt_alloc_guard): every
+// SPDX-License-Identifier: BSD-3-Clause
+// The allocation guard (hil/diag/alloc_guard.hpp) with its hooks linked (ehpt_alloc_guard): every
 // allocating entry counted exactly once while armed, and only then; from any thread; libc's
 // own allocations too; the first one described; abort on allocation, by choice or by the
 // environment, naming the kind and with a backtrace.
@@ -18,7 +19,7 @@
 #include <string>
 #include <thread>
 
-#include "hil/alloc_guard.hpp"
+#include "hil/diag/alloc_guard.hpp"
 
 namespace ehpt::hil {
 namespace {

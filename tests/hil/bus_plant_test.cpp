@@ -1,4 +1,5 @@
-// The bus plant (hil/bus_plant.hpp) against an ECU that lives inside a fake transport: the
+// SPDX-License-Identifier: BSD-3-Clause
+// The bus plant (hil/bus/bus_plant.hpp) against an ECU that lives inside a fake transport: the
 // whole loop in one thread, deterministic, so that timing rules are checked to the step and
 // the run phase's allocations are counted.
 #include <gtest/gtest.h>
@@ -12,9 +13,9 @@
 #include <unistd.h>
 
 #include "alloc_counter.hpp"
-#include "hil/batch.hpp"
-#include "hil/bus_plant.hpp"
-#include "hil/simulation.hpp"
+#include "hil/run/batch.hpp"
+#include "hil/bus/bus_plant.hpp"
+#include "hil/run/simulation.hpp"
 #include "io/can/codec.hpp"
 #include "io/output_dir.hpp"
 #include "test_plants.hpp"

@@ -1,4 +1,5 @@
-#include "hil/campaign.hpp"
+// SPDX-License-Identifier: BSD-3-Clause
+#include "hil/campaign/campaign.hpp"
 
 #include <gtest/gtest.h>
 #include <unistd.h>

@@ -1,4 +1,5 @@
-#include "hil/config.hpp"
+// SPDX-License-Identifier: BSD-3-Clause
+#include "hil/config/config.hpp"
 
 #include <gtest/gtest.h>
 
@@ -7,9 +8,9 @@
 #include <filesystem>
 #include <fstream>
 
-#include "hil/toml_guard.hpp"
+#include "hil/config/toml_guard.hpp"
 
-#include "hil/scenario.hpp"
+#include "hil/config/scenario.hpp"
 #include "test_plants.hpp"
 
 namespace ehpt::hil {

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // RK4 at 1 ms (the product path: the shipped scenario through make_simulation) against the
 // variable-step CVODE reference (BDF, rtol 1e-8, the same plant, ECU and events) on NEDC:
 // final SOC within 1e-4, fuel and distance within 0.1 %. The wall times and their ratio are
@@ -9,8 +10,8 @@
 #include <cstdio>
 #include <string>
 
-#include "hil/cvode_reference.hpp"
-#include "hil/simulation.hpp"
+#include "hil/reference/cvode_reference.hpp"
+#include "hil/run/simulation.hpp"
 #include "test_plants.hpp"
 
 namespace ehpt::hil {

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The EVs with machine-physics drives (MODELS.md §10.1, §10.2) through the loader and the
 // Simulation facade the CLI uses: P15 §5.1's observations on Sort1 (Figs. 18-20), the energy
 // balance, the current limit over a whole cycle, and the follower through the CAN codec.
@@ -7,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "hil/config.hpp"
-#include "hil/simulation.hpp"
+#include "hil/config/config.hpp"
+#include "hil/run/simulation.hpp"
 #include "ecu/ev_follower.hpp"
 #include "plant/ev_machine_plant.hpp"
 #include "solvers/event_stepper.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Zero heap allocations in the run phase of the detailed-machine rigs (TestPMDrive,
 // TestAMDrive), through the facade the CLI uses: the drive's solve, the machine equations
 // and the product's implicit Euler over 10^4 steps.
@@ -7,7 +8,7 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
-#include "hil/simulation.hpp"
+#include "hil/run/simulation.hpp"
 #include "test_plants.hpp"
 
 namespace ehpt::hil {

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // TestPMDrive and TestAMDrive end to end: the shipped scenarios (scenarios/test_pm_drive.toml,
 // scenarios/test_am_drive.toml) loaded and run through the library's Simulation facade, as
 // `ehpt run` does, and the paper's comparisons checked on the recorded rows. The tolerances
@@ -10,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "hil/config.hpp"
-#include "hil/simulation.hpp"
+#include "hil/config/config.hpp"
+#include "hil/run/simulation.hpp"
 #include "test_plants.hpp"
 
 namespace ehpt::hil {

@@ -1,12 +1,13 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Zero heap allocations in the run phase: a counting operator new (support/alloc_counter.cpp)
 // around 1e5 steps after start-up, for every plant and solver.
 #include <gtest/gtest.h>
 
 #include "alloc_counter.hpp"
-#include "hil/config.hpp"
+#include "hil/config/config.hpp"
 #include "ecu/ev_follower.hpp"
-#include "hil/runner.hpp"
-#include "hil/simulation.hpp"
+#include "hil/run/runner.hpp"
+#include "hil/run/simulation.hpp"
 #include "plant/bev_plant.hpp"
 #include "plant/drive_rigs.hpp"
 #include "plant/psd_plant.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The runner with a plant's observation (solvers/plant.hpp, PlantWithObservation): the full
 // outputs only for the rows it records, the observation at every other grid point, dx/dt and
 // the crossing functions handed to the next step. Against the same plant with the observation
@@ -14,7 +15,7 @@
 
 #include "ecu/ev_follower.hpp"
 #include "ecu/psd_ecu.hpp"
-#include "hil/runner.hpp"
+#include "hil/run/runner.hpp"
 #include "plant/bev_plant.hpp"
 #include "plant/psd_plant.hpp"
 #include "solvers/integrators.hpp"

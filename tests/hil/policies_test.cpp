@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The runner's policies, each on its own: Metrics, Recorder, FaultPolicy and the pacers'
 // timing (on a fake clock).
 #include <gtest/gtest.h>
@@ -8,13 +9,13 @@
 #include <vector>
 
 #include "ecu/ev_follower.hpp"
-#include "hil/latency_histogram.hpp"
-#include "hil/row_queue.hpp"
-#include "hil/trajectory_hash.hpp"
-#include "hil/metrics.hpp"
-#include "hil/pacer.hpp"
-#include "hil/recorder.hpp"
-#include "hil/runner.hpp"
+#include "hil/run/latency_histogram.hpp"
+#include "hil/run/row_queue.hpp"
+#include "hil/run/trajectory_hash.hpp"
+#include "hil/run/metrics.hpp"
+#include "hil/run/pacer.hpp"
+#include "hil/run/recorder.hpp"
+#include "hil/run/runner.hpp"
 #include "plant/bev_plant.hpp"
 #include "solvers/integrators.hpp"
 #include "test_plants.hpp"

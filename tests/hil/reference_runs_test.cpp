@@ -1,10 +1,11 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Reference runs (tests/data/ref/, see its README): a rerun must match within 1e-6 relative.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "hil/config.hpp"
-#include "hil/runner.hpp"
+#include "hil/config/config.hpp"
+#include "hil/run/runner.hpp"
 #include "io/csv_table.hpp"
 #include "solvers/integrators.hpp"
 #include "test_plants.hpp"

@@ -1,4 +1,5 @@
-#include "hil/runner.hpp"
+// SPDX-License-Identifier: BSD-3-Clause
+#include "hil/run/runner.hpp"
 
 #include <gtest/gtest.h>
 

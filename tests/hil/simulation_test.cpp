@@ -1,13 +1,14 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The Simulation facade: what the CLI and the batch runner use, and what an ECU outside
 // (a bus, the Python module) steps between its periods.
-#include "hil/simulation.hpp"
+#include "hil/run/simulation.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cstring>
 
 #include "ecu/psd_ecu.hpp"
-#include "hil/scenario.hpp"
+#include "hil/config/scenario.hpp"
 #include "test_plants.hpp"
 
 namespace ehpt::hil {

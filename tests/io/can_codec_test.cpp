@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "io/can/codec.hpp"
 
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // HandoffBuffer: the loop's text reaches the file in order, from another thread, and a writer
 // that falls behind costs dropped text (counted), never a wait or an allocation.
 #include "io/handoff_buffer.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // LCM (io/lcm/): the generated types' round trips, the URL rules, and the plant in lockstep
 // with an ECU over memq in one thread (the ECU answers inside its subscription handler):
 // bit-identical to the in-process run, and what liblcm allocates per message, measured.
@@ -11,8 +12,8 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
-#include "hil/bus_plant.hpp"
-#include "hil/simulation.hpp"
+#include "hil/bus/bus_plant.hpp"
+#include "hil/run/simulation.hpp"
 #include "io/lcm/lcm_bus.hpp"
 #include "io/lcm/lcm_codec.hpp"
 #include "io/output_dir.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // SocketCAN transport against a real vcan0 (run by tools/vcan-vm.sh on kernels without CAN):
 //   socketcan_probe [INTERFACE]      exit 0: all checks pass, 1: a check failed,
 //                                    77: this kernel has no CAN (nothing was checked)

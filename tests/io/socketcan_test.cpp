@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // open_socketcan's start-up errors, on whatever kernel runs the tests: with no CAN in the
 // kernel (this host, most CI runners) the message says so; with CAN, a missing interface is
 // named. Frames on a real vcan0: tests/io/socketcan_probe.cpp under tools/vcan-vm.sh.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The socketcand server (io/can/socketcand.hpp) on 127.0.0.1: eight clients that connect and
 // never finish their handshake cannot lock an ECU out; their slots are freed after 5 s.
 #include <arpa/inet.h>

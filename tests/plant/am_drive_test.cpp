@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // AMDrive's operating point (plant/am_drive.hpp, MODELS.md §9.2): checked against the
 // textbook closed forms of the equivalent circuit and the literal phasor equations of §9.2,
 // written out here independently of the code's flux form.

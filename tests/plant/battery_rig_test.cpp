@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Battery test rig: Batt1 (MODELS.md §6) on constant-current / constant-power segments.
 #include "plant/battery_rig.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The map-based EV (MBEV, MODELS.md §10.3) on Sort1 and NEDC, break-away, stiction without
 // chattering, slope, and the energy audit.
 #include "plant/bev_plant.hpp"
@@ -9,7 +10,7 @@
 #include <vector>
 
 #include "ecu/ev_follower.hpp"
-#include "hil/config.hpp"
+#include "hil/config/config.hpp"
 #include "solvers/event_stepper.hpp"
 #include "solvers/integrators.hpp"
 #include "test_plants.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The time-domain machines (plant/detailed_machines.hpp) and the TestPMDrive / TestAMDrive
 // rigs (plant/machine_test_rigs.hpp), integrated by the product's implicit Euler.
 //

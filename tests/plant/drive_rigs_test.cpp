@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // TestMBOneFlange (P15 §3, Figs. 11-13; MODELS.md §11.1) and TestTwoFlange (§11.3).
 #include "plant/drive_rigs.hpp"
 
@@ -6,7 +7,7 @@
 #include <cmath>
 #include <vector>
 
-#include "hil/config.hpp"
+#include "hil/config/config.hpp"
 #include "solvers/event_stepper.hpp"
 #include "test_plants.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Map-based ICE (MODELS.md §3) and the ICE test set-ups of §11.4.
 #include "plant/map_ice.hpp"
 
@@ -5,7 +6,7 @@
 
 #include <cmath>
 
-#include "hil/config.hpp"
+#include "hil/config/config.hpp"
 #include "plant/drive_rigs.hpp"
 #include "solvers/integrators.hpp"
 #include "test_plants.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The plants' observation (solvers/plant.hpp, PlantWithObservation): at every grid point of
 // a whole cycle, with the built-in ECU closing the loop, observe() gives bit for bit what
 // outputs() gives on the fields the runner reads at every step (those kMetrics names and
@@ -16,7 +17,7 @@
 
 #include "ecu/ev_follower.hpp"
 #include "ecu/psd_ecu.hpp"
-#include "hil/runner.hpp"
+#include "hil/run/runner.hpp"
 #include "plant/bev_plant.hpp"
 #include "plant/ev_machine_plant.hpp"
 #include "plant/psd_plant.hpp"

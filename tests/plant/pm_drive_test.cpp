@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // PMDrive's operating point (plant/pm_drive.hpp, MODELS.md §9.1, P15 eqs. 1-2): checked
 // against the equations themselves, not against the code's own numbers.
 #include "plant/pm_drive.hpp"

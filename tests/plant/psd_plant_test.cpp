@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The power-split hybrid (MODELS.md §4, §5, §10.4) with its built-in ECUs.
 #include "plant/psd_plant.hpp"
 
@@ -5,7 +6,7 @@
 
 #include <cmath>
 
-#include "hil/runner.hpp"
+#include "hil/run/runner.hpp"
 #include "solvers/integrators.hpp"
 #include "test_plants.hpp"
 

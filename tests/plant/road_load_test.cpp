@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Coast-down from 100 km/h under road load only, against the closed-form solutions, in both
 // road-load forms; stop located inside the step; stuck afterwards with no further events.
 #include "plant/road_load.hpp"

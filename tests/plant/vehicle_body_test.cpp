@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The vehicle body both vehicles share (MODELS.md §7): forces, brake, the body's states'
 // derivatives, the crossings of its modes.
 #include "plant/vehicle_body.hpp"

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Helpers of the Python module's tests (tests/python/test_*.py): the CLI run to compare with,
 its CSV read back as doubles, and bit-for-bit comparisons that say where they differ.
 
@@ -19,7 +20,7 @@ import numpy as np
 #   wall_time_s, run_wall_time_s, realtime_factor, ns_per_step   the wall clock
 #   peak_rss_MB                     the process's memory (Python and numpy are in the module's)
 #   heap_allocations_after_startup  counted by the CLI's malloc hooks only (None in the module,
-#                                   which must not replace malloc: hil/alloc_guard.hpp)
+#                                   which must not replace malloc: hil/diag/alloc_guard.hpp)
 TIMING_KEYS = ("wall_time_s", "run_wall_time_s", "realtime_factor", "ns_per_step", "peak_rss_MB",
                "heap_allocations_after_startup")
 

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: BSD-3-Clause
 """Misuse raises a Python exception that says what is wrong, and never crashes the interpreter:
 a scenario that does not load is a ValueError naming each bad key (and its value); a command of
 the wrong vehicle family a TypeError; a step count out of range a ValueError."""

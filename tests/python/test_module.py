@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: BSD-3-Clause
 """ehpt.run equals `ehpt run`, bit for bit: the timeseries (every column, every row, read back
 from timeseries.csv with float()) and every key of summary.json except the timing ones
 (ehpt_test_support.TIMING_KEYS). Overrides given as Python values must reach the scenario as

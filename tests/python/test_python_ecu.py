@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: BSD-3-Clause
 """The stepping interface: an ECU written in Python, in process, in lockstep with the plant.
 
 python/examples/mbecu2_ecu.py mirrors ecu/psd_ecu.cpp operation for operation; driven through

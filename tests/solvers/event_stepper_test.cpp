@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "solvers/event_stepper.hpp"
 
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Orders of convergence measured on problems with known solutions, and stiffness.
 #include "solvers/integrators.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "test_plants.hpp"
 
 #include <unistd.h>
@@ -6,8 +7,8 @@
 
 #include <gtest/gtest.h>
 
-#include "hil/config.hpp"
-#include "hil/runner.hpp"
+#include "hil/config/config.hpp"
+#include "hil/run/runner.hpp"
 
 namespace ehpt::test {
 

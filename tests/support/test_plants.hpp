@@ -1,10 +1,11 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Parameter sets shared by several tests (the shipped MBEV, a coast-down vehicle, cycles).
 
 #include <filesystem>
 #include <string>
 
-#include "hil/config.hpp"
+#include "hil/config/config.hpp"
 #include "plant/bev_plant.hpp"
 
 namespace ehpt::test {

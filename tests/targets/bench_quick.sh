@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # `ehpt bench --quick` (issue 11): runs the whole suite, prints its table, and checks bench.json:
 # every section present; ns per step, real-time factors and latencies finite and positive;
 # every trajectory hash 16 hex digits and the runs that must be bit-identical equal (read from

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: BSD-3-Clause
 """End-to-end tests of the CAN bus targets: the real `ehpt plant` and `ehpt ecu` binaries and
 python-can's socketcand client, over TCP on 127.0.0.1 (no CAN in the kernel needed).
 

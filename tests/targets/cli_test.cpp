@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The real binary: bad input is rejected with file, line, field and value, exit code 2 and no
 // output folder; good runs are bit-identical; a run-time fault keeps its outputs.
 #include <gtest/gtest.h>

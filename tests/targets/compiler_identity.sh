@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # The trajectory does not depend on the compiler or on -march=native (issue 11): ehpt built
 # with clang++ and with g++ -march=native runs the same scenarios as the main build (g++,
 # the project's flags), and every timeseries.csv is byte-identical. -ffp-contract=off (set

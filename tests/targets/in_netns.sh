@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: BSD-3-Clause
 # Runs COMMAND in a private network namespace whose loopback carries multicast (LCM udpm):
 # no packet of the test can leave it. 77 (skipped) where namespaces cannot be made.
 # usage: tests/targets/in_netns.sh COMMAND [ARGS...]

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # ehpt as a dependency (README "Install"), on the real build:
 #  1. cmake --install into a temporary prefix; the installed ehpt runs psecu2_nedc from an
 #     unrelated folder with the source tree hidden (a private mount namespace binds an empty
@@ -23,7 +24,7 @@ echo "== 1. cmake --install --prefix $prefix"
 cmake --install "$build" --prefix "$prefix" >"$tmp/install.log"
 for f in bin/ehpt libexec/ehpt/plot.py share/ehpt/scenarios/psecu2_nedc.toml share/ehpt/vehicles/psecu2.toml \
          share/ehpt/data/cycles/cycle_nedc.csv share/ehpt/campaigns/psecu2_calibration.toml share/ehpt/can/ehpt.dbc \
-         share/ehpt/lcm/psd_sensors_t.lcm include/ehpt/hil/simulation.hpp include/ehpt/plant/psd_plant.hpp \
+         share/ehpt/lcm/psd_sensors_t.lcm include/ehpt/hil/run/simulation.hpp include/ehpt/plant/psd_plant.hpp \
          include/ehpt/ehpt_lcm/psd_sensors_t.hpp lib/libehpt_hil.a lib/cmake/ehpt/ehptConfig.cmake \
          lib/cmake/ehpt/ehptTargets.cmake; do
   [ -e "$prefix/$f" ] || fail "the install has no $f"

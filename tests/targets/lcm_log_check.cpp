@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // lcm_log_check LOGFILE [PREFIX [PERIOD_STEPS]]: reads an LCM log (lcm-logger's format) of an
 // EV lockstep session and checks the contract on the wire with the generated types:
 //   - every <prefix>PLANT_STATUS event decodes as ehpt_lcm::ev_sensors_t, every

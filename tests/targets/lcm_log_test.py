@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: BSD-3-Clause
 """LCM sessions recorded with lcm-logger, checked with lcm_log_check, and replayed with
 lcm-logplayer: the record + replay workflow of the README, end to end.
 

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: BSD-3-Clause
 """tools/plot.py on a sweep folder (`ehpt sweep`'s sweep.json + results.csv): the fuel vs
 final SOC figures, one per swept key, drawn from a small synthetic campaign.
 

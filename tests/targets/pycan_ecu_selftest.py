@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: BSD-3-Clause
 """Self-test of tools/ehpt_dbc.py and tools/pycan_ecu.py, without a plant and without vcan:
 DBC round trips and golden frames, the two strategies, and the ECU end to end on python-can's
 in-process `virtual` bus against a tiny fake plant. Exit status 0: all passed.

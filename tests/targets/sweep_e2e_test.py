@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: BSD-3-Clause
 """End-to-end tests of `ehpt sweep` with the local executor, on the real binary.
 
 Usage: /usr/bin/python3 tests/targets/sweep_e2e_test.py EHPT [GROUP ...]

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: BSD-3-Clause
 """`ehpt sweep --executor slurm` on a real one-node Slurm cluster (Debian's slurm-wlm and munge,
 started by tools/slurm-cluster.sh in a temporary folder, private ports and munge socket).
 

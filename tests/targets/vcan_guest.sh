@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: BSD-3-Clause
 # Runs inside tools/vcan-vm.sh (a qemu guest with a real vcan0): ehpt plant on vcan0 in
 # lockstep with (a) ehpt ecu and (b) the python-can example ECU (interface socketcan).
 # usage: vcan_guest.sh EHPT OUT_DIR SOURCE_DIR DURATION_S
