@@ -18,7 +18,7 @@ import tempfile
 
 BEGIN = "<!-- quickstart:begin -->"
 END = "<!-- quickstart:end -->"
-LIMIT_S = 240
+LIMIT_S = 100
 
 
 def blocks(readme_text):
