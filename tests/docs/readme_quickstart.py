@@ -7,7 +7,9 @@ usage: readme_quickstart.py README.md EHPT_BINARY [--print]
 Takes every fenced ```sh block between the lines `<!-- quickstart:begin -->` and
 `<!-- quickstart:end -->` of README.md, in order, and runs them as one script with
 `bash -e -o pipefail` in a fresh temporary folder (the newcomer's own folder), with the
-folder of EHPT_BINARY first on PATH and EHPT_SCENARIOS unset. Exit 0 when every command
+folder of EHPT_BINARY first on PATH and EHPT_SCENARIOS unset; inside a private network
+namespace where one can be made (its loopback only: the quick start's bus port cannot
+collide with another test's). Exit 0 when every command
 succeeded; otherwise the failing command's status, with its output. --print only lists the
 commands. The whole quick start must finish within the limit below (ctest adds its own).
 """
@@ -19,6 +21,13 @@ import tempfile
 BEGIN = "<!-- quickstart:begin -->"
 END = "<!-- quickstart:end -->"
 LIMIT_S = 100
+
+
+def private_network():
+    try:
+        return subprocess.run(["unshare", "-n", "true"], stderr=subprocess.DEVNULL, timeout=10).returncode == 0
+    except (OSError, subprocess.TimeoutExpired):
+        return False
 
 
 def blocks(readme_text):
@@ -73,8 +82,13 @@ def main(argv):
         print(f"running {len(script_blocks)} blocks of {readme} in {work}:\n{script}", flush=True)
         try:
             # -x: each command is echoed before it runs, so a failure names its command
-            done = subprocess.run(["bash", "-e", "-o", "pipefail", "-x", ".quickstart.sh"], cwd=work, env=env,
-                                  timeout=LIMIT_S, stdin=subprocess.DEVNULL)
+            command = ["bash", "-e", "-o", "pipefail", "-x", ".quickstart.sh"]
+            if private_network():
+                # a private loopback: the quick start's TCP port cannot meet another test's
+                command = ["unshare", "-n", "sh", "-c", 'ip link set lo up && exec "$@"', "quickstart"] + command
+            else:
+                print("note: no private network namespace here; the quick start uses the host's loopback")
+            done = subprocess.run(command, cwd=work, env=env, timeout=LIMIT_S, stdin=subprocess.DEVNULL)
         except subprocess.TimeoutExpired:
             print(f"error: the quick start did not finish within {LIMIT_S} s", file=sys.stderr)
             return 1
