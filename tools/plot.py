@@ -759,11 +759,17 @@ def main(argv):
         print(USAGE, file=sys.stderr)
         return 2
     out_dir = out_dir or src
+    # ehpt passes --as the run folder as the user named it (src may be its temporary folder)
+    shown_src = shown or src
     shown = shown or out_dir
     if os.path.isfile(os.path.join(src, "sweep.json")):  # `ehpt sweep`'s folder
         figures = sweep_figures(src)
     else:
-        cols = load_csv(os.path.join(src, "timeseries.csv"))
+        csv_path = os.path.join(src, "timeseries.csv")
+        if not os.path.exists(csv_path) and os.path.isfile(os.path.join(src, "summary.json")):
+            raise PlotError(f"{shown_src}: the run wrote no timeseries.csv (output.timeseries = false in "
+                            "its scenario or --set): nothing to draw; run it again with output.timeseries = true")
+        cols = load_csv(csv_path)
         scenario = load_summary(os.path.join(src, "summary.json")).get("scenario")
         figures = draw_run(cols, str(scenario) if scenario else "")[1]
     for name, fig in figures:

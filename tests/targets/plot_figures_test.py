@@ -16,6 +16,8 @@ sweep folder, checked:
   soc (or the sweep's soc_end) times 100, not the fraction;
 - every axis label's unit is SI as the column suffixes say (a fixed set: m/s, N m, rad/s,
   kW, V, A, g, %, 0/1, ...);
+- a run with output.timeseries = false: one error line naming the folder (as --as says)
+  and the key, exit 1, nothing written;
 - docs/figures.md names, per family, exactly the figures of --list-figures, and every image
   it shows exists as a PNG.
 Exit 0 if every check passed, 1 otherwise; each check is printed.
@@ -262,6 +264,22 @@ def main():
                     plot.plt.close(fig)
                 if "soc" in cols:
                     check(socs > 0, f"{scenario}: some figure shows the SOC ({socs} axes)")
+
+        # a run without a timeseries: one error line naming the folder as --as says (ehpt
+        # passes the user's folder there) and the key to change; nothing written
+        bare, shown = os.path.join(root, "no_timeseries"), "/home/user/my run"
+        r = subprocess.run([EHPT, "run", os.path.join(SRC, "scenarios", "ev_sort1.toml"), "--quiet", "--set",
+                            "solver.duration_s=2", "--set", "output.timeseries=false", "--out", bare],
+                           capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=300)
+        before = sorted(os.listdir(bare)) if r.returncode == 0 else None
+        r = subprocess.run(["/usr/bin/python3", PLOT_PY, bare, "--out-dir", bare, "--as", shown],
+                           capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=300)
+        lines = r.stderr.strip().splitlines()
+        check(r.returncode == 1 and len(lines) == 1 and lines[0].startswith(f"plot.py: error: {shown}: ")
+              and "output.timeseries = false" in lines[0] and "Traceback" not in r.stderr
+              and sorted(os.listdir(bare)) == before,
+              f"output.timeseries = false: exit 1, one line naming {shown!r} and the key, nothing written "
+              f"(rc {r.returncode}, {r.stderr.strip()!r})")
 
         sweep = os.path.join(root, "sweep")
         truth = write_sweep(sweep)
