@@ -13,6 +13,8 @@
 //                         solved at every RK4 stage; EvAm_bat: the equivalent circuit)
 #include <benchmark/benchmark.h>
 
+#include "ecu/ev_follower.hpp"
+#include "ecu/psd_ecu.hpp"
 #include "hil/config/config.hpp"
 #include "hil/run/runner.hpp"
 #include "plant/bev_plant.hpp"
@@ -41,7 +43,7 @@ void set_step_counters(benchmark::State& state, double steps) {
 template <class Integrator>
 void BM_BevStep(benchmark::State& state) {
   const hil::Scenario sc = load("ev_nedc.toml");
-  const plant::BevPlant plant(std::get<plant::BevParams>(sc.plant));
+  const plant::BevPlant plant(sc.plant.get<plant::BevParams>());
   Integrator integrator(plant);
   solvers::EventStepper<plant::BevPlant, Integrator> stepper(plant, integrator, 0.0, 1e-3);
   plant::BevPlant::State x = plant.initial_state();
@@ -69,7 +71,7 @@ BENCHMARK(BM_BevStep<solvers::ImplicitEuler<plant::BevPlant>>)->Name("BM_BevStep
 template <class Integrator>
 void BM_BevRun(benchmark::State& state) {
   const hil::Scenario sc = load("ev_nedc.toml");
-  const plant::BevPlant plant(std::get<plant::BevParams>(sc.plant));
+  const plant::BevPlant plant(sc.plant.get<plant::BevParams>());
   std::int64_t steps = 0;
   for (auto _ : state) {
     ecu::EvFollower follower;
@@ -93,9 +95,9 @@ BENCHMARK(BM_BevRun<solvers::ImplicitEuler<plant::BevPlant>>)
 template <class Integrator>
 void psecu2_step(benchmark::State& state, const char* scenario) {
   const hil::Scenario sc = load(scenario);
-  const auto& p = std::get<plant::PsdParams>(sc.plant);
+  const auto& p = sc.plant.get<plant::PsdParams>();
   const plant::PsdPlant plant(p);
-  const auto& ecu_params = std::get<ecu::PsdEcuParams>(sc.ecu);
+  const auto& ecu_params = sc.ecu.get<ecu::PsdEcuParams>();
   ecu::PsdEcu ecu(ecu_params, 1e-3);
   Integrator integrator(plant);
   solvers::EventStepper<plant::PsdPlant, Integrator> stepper(plant, integrator, 0.0, 1e-3);
@@ -130,11 +132,11 @@ BENCHMARK_CAPTURE(BM_Psecu2StepIE, maps, "psecu2_nedc.toml")->Name("BM_Psecu2Ste
 
 void BM_Psecu2Run_nedc(benchmark::State& state, const char* scenario) {
   const hil::Scenario sc = load(scenario);
-  const auto& p = std::get<plant::PsdParams>(sc.plant);
+  const auto& p = sc.plant.get<plant::PsdParams>();
   const plant::PsdPlant plant(p);
   std::int64_t steps = 0;
   for (auto _ : state) {
-    const auto& ecu_params = std::get<ecu::PsdEcuParams>(sc.ecu);
+    const auto& ecu_params = sc.ecu.get<ecu::PsdEcuParams>();
   ecu::PsdEcu ecu(ecu_params, 1e-3);
     hil::Runner<plant::PsdPlant, solvers::Rk4<plant::PsdPlant>, ecu::PsdEcu> runner(
         plant, 1e-3, sc.solver.steps, 100, {0, 1, 2}, sc.solver.steps, &ecu, 1);
@@ -149,7 +151,7 @@ BENCHMARK_CAPTURE(BM_Psecu2Run_nedc, eta1, "psecu2_source_nedc.toml")->Unit(benc
 
 void BM_OneFlangeStep(benchmark::State& state) {
   const hil::Scenario sc = load("one_flange_test.toml");
-  const plant::DriveRig rig(std::get<plant::DriveRigParams>(sc.plant));
+  const plant::DriveRig rig(sc.plant.get<plant::DriveRigParams>());
   solvers::Rk4<plant::DriveRig> rk4(rig);
   solvers::EventStepper<plant::DriveRig, solvers::Rk4<plant::DriveRig>> stepper(rig, rk4, 0.0, 1e-3);
   plant::DriveRig::State x = rig.initial_state();
@@ -176,7 +178,7 @@ namespace {
 template <class Plant>
 void BM_EvRun(benchmark::State& state, const char* scenario) {
   const hil::Scenario sc = load(scenario);
-  const Plant plant(std::get<typename Plant::Params>(sc.plant));
+  const Plant plant(sc.plant.get<typename Plant::Params>());
   using Integrator = solvers::Rk4<Plant>;
   std::int64_t steps = 0;
   for (auto _ : state) {

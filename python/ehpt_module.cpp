@@ -287,7 +287,7 @@ py::object ecu_parameters(const hil::Scenario& sc) {
   d["period_s"] = sc.ecu_timing.period_s;
   d["latency_s"] = sc.ecu_timing.latency_s;
   d["codec"] = sc.ecu_timing.codec;
-  if (const auto* e = std::get_if<ecu::PsdEcuParams>(&sc.ecu)) {
+  if (const auto* e = sc.ecu.get_if<ecu::PsdEcuParams>()) {
     d["kind"] = ecu::ecu_name(e->kind);
     d["max_torque_request_Nm"] = e->max_torque_request_Nm;
     d["power_filter_s"] = e->power_filter_s;
@@ -302,7 +302,7 @@ py::object ecu_parameters(const hil::Scenario& sc) {
     d["on_threshold_W"] = e->on_threshold_W;
     d["off_threshold_W"] = e->off_threshold_W;
     d["ice_off_speed_ref_rad_s"] = e->ice_off_speed_ref_rad_s;
-  } else if (std::holds_alternative<ecu::EvFollowerParams>(sc.ecu)) {
+  } else if (sc.ecu.holds<ecu::EvFollowerParams>()) {
     d["kind"] = "follower";
   } else {
     return py::none();
@@ -333,8 +333,8 @@ class PySimulation {
       loaded = load(scenario, overrides, sc_, errors);
     }
     if (!loaded) throw_load_errors(scenario, errors);
-    family_ = std::holds_alternative<ecu::PsdEcuParams>(sc_.ecu)  ? Family::kPsd
-              : std::holds_alternative<ecu::EvFollowerParams>(sc_.ecu) ? Family::kEv
+    family_ = sc_.ecu.holds<ecu::PsdEcuParams>()  ? Family::kPsd
+              : sc_.ecu.holds<ecu::EvFollowerParams>() ? Family::kEv
                                                                        : Family::kNone;
     if (external_ && family_ == Family::kNone) {
       throw py::value_error(scenario + ": this vehicle has no ECU (a test rig): external_ecu=True does not apply");

@@ -34,6 +34,7 @@
 #include <system_error>
 #include <vector>
 
+#include "ecu/psd_ecu.hpp"
 #include "hil/run/batch.hpp"
 #include "hil/bus/bus_ecu.hpp"
 #include "hil/bus/bus_plant.hpp"
@@ -592,7 +593,7 @@ int parse_bus_args(const std::vector<std::string>& args, bool plant, const char*
 // The ids a side of the contract accepts, by vehicle family.
 std::span<const std::uint32_t> rx_ids(const ehpt::hil::Scenario& sc, bool plant) {
   namespace can = ehpt::io::can;
-  const bool psd = std::holds_alternative<ehpt::ecu::PsdEcuParams>(sc.ecu);
+  const bool psd = sc.ecu.holds<ehpt::ecu::PsdEcuParams>();
   if (plant) return psd ? std::span<const std::uint32_t>(can::kPsdCommandIds) : std::span<const std::uint32_t>(can::kEvCommandIds);
   return psd ? std::span<const std::uint32_t>(can::kPsdSensorIds) : std::span<const std::uint32_t>(can::kEvSensorIds);
 }
@@ -789,7 +790,7 @@ int cmd_replay(const std::vector<std::string>& args) {
     std::cerr << log_path << ": " << why << "\n";
     return 2;
   }
-  const bool psd = std::holds_alternative<ehpt::ecu::PsdEcuParams>(sc.ecu);
+  const bool psd = sc.ecu.holds<ehpt::ecu::PsdEcuParams>();
   if ((psd ? "psd" : "ev") != log.family) {
     std::cerr << log_path << ": its commands are of family '" << log.family << "' but " << log.scenario_path
               << " is a" << (psd ? " hybrid ('psd')" : "n EV ('ev')") << "\n";

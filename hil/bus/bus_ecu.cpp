@@ -222,7 +222,7 @@ BusEcuResult serve_scenario(const Scenario& sc, MakeWire&& make_wire, const BusE
     }
     return serve(controller, *wire, opt, stop, log);
   };
-  if (const auto* e = std::get_if<ecu::PsdEcuParams>(&sc.ecu)) {
+  if (const auto* e = sc.ecu.get_if<ecu::PsdEcuParams>()) {
     ecu::PsdEcu controller(*e, e->period_s);
     auto wire = make_wire(msgs::PsdSensors{});
     return go(controller, wire);
@@ -235,7 +235,7 @@ BusEcuResult serve_scenario(const Scenario& sc, MakeWire&& make_wire, const BusE
 }  // namespace
 
 bool has_bus_ecu(const Scenario& sc, std::string& why) {
-  if (std::holds_alternative<ecu::PsdEcuParams>(sc.ecu) || std::holds_alternative<ecu::EvFollowerParams>(sc.ecu)) {
+  if (sc.ecu.holds<ecu::PsdEcuParams>() || sc.ecu.holds<ecu::EvFollowerParams>()) {
     return true;
   }
   why = sc.name + ": its vehicle (" + sc.vehicle_path + ") has no built-in ECU to run on the bus";

@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <span>
 
+#include "ecu/ev_follower.hpp"
+#include "ecu/psd_ecu.hpp"
 #include "hil/bus/bus_family.hpp"
 #include "hil/bus/bus_wire_can.hpp"
 #include "hil/bus/bus_wire_lcm.hpp"
@@ -311,7 +313,7 @@ class BusPlant final : public ExternalDriver {
 
 bool can_run_on_bus(const Scenario& sc, std::string& why) {
   // the ECU's messages decide the bus family: every EV kind uses the follower's, the hybrid its own
-  if (!std::holds_alternative<ecu::PsdEcuParams>(sc.ecu) && !std::holds_alternative<ecu::EvFollowerParams>(sc.ecu)) {
+  if (!sc.ecu.holds<ecu::PsdEcuParams>() && !sc.ecu.holds<ecu::EvFollowerParams>()) {
     why = sc.name + ": its vehicle (" + sc.vehicle_path +
           ") has no bus messages (the EV and the power-split hybrid talk to an ECU; the rigs do not)";
     return false;
@@ -327,7 +329,7 @@ bool can_run_on_bus(const Scenario& sc, std::string& why) {
 std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::can::Transport& bus, const BusPlantOptions& opt,
                                                std::string& error) {
   if (!can_run_on_bus(sc, error)) return nullptr;
-  if (std::holds_alternative<ecu::PsdEcuParams>(sc.ecu)) {
+  if (sc.ecu.holds<ecu::PsdEcuParams>()) {
     using S = msgs::PsdSensors;
     return std::make_unique<BusPlant<S, CanWire<S>>>(sc, opt, bus, opt.log_interface);
   }
@@ -338,7 +340,7 @@ std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::can::Tran
 std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::lcm::LcmBus& bus, const BusPlantOptions& opt,
                                                std::string& error) {
   if (!can_run_on_bus(sc, error)) return nullptr;
-  if (std::holds_alternative<ecu::PsdEcuParams>(sc.ecu)) {
+  if (sc.ecu.holds<ecu::PsdEcuParams>()) {
     using S = msgs::PsdSensors;
     return std::make_unique<BusPlant<S, LcmWire<S>>>(sc, opt, bus, opt.lcm_prefix);
   }

@@ -130,6 +130,7 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
   Reader vr(vlayers, "", out.vehicle_path, ctx);
   vr.text("description", "");
   const std::string kind = vr.text("kind", "");
+  out.kind = kind;
   Problems problems, warnings;
   KindRead read;
   if (const ReadKind read_kind = find_kind_reader(kind)) {
@@ -220,7 +221,7 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
     } else if (t.codec != "none") {
       ctx.error(ctx.where["ecu.codec"], "ecu.codec", "\"" + t.codec + "\"", "must be \"none\" or \"can\"");
     }
-    if (auto* e = std::get_if<ecu::PsdEcuParams>(&out.ecu)) e->period_s = t.period_s;
+    if (read.set_ecu_period != nullptr) read.set_ecu_period(out, t.period_s);
   }
   for (std::string& w : ctx.warnings) out.warnings.push_back(std::move(w));
   out.inputs = std::move(ctx.inputs);

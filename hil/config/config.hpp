@@ -9,17 +9,9 @@
 
 #include <cstdint>
 #include <string>
-#include <variant>
 #include <vector>
 
-#include "ecu/ev_follower.hpp"
-#include "ecu/psd_ecu.hpp"
-#include "plant/battery_rig.hpp"
-#include "plant/bev_plant.hpp"
-#include "plant/drive_rigs.hpp"
-#include "plant/ev_machine_plant.hpp"
-#include "plant/machine_test_rigs.hpp"
-#include "plant/psd_plant.hpp"
+#include "hil/config/any_params.hpp"
 
 namespace ehpt::hil {
 
@@ -74,11 +66,11 @@ struct Scenario {
   std::string description;
   std::string vehicle_path;
   std::string cycle_path;   // empty for rigs
-  std::variant<plant::BevParams, plant::DriveRigParams, plant::PsdParams, plant::BatteryRigParams, plant::EvPmParams,
-               plant::EvAmParams, plant::PmDriveTestParams, plant::AmDriveTestParams>
-      plant;
-  // the built-in ECU of vehicles that have one (the EV's follower, MBecu1/1soc/2)
-  std::variant<std::monostate, ecu::EvFollowerParams, ecu::PsdEcuParams> ecu;
+  std::string kind;          // the vehicle file's `kind` (hil/kinds/<kind>.cpp)
+  // the vehicle's parameters, of its kind's type (e.g. plant::BevParams: plant.get<plant::BevParams>())
+  AnyParams plant;
+  // the built-in ECU of vehicles that have one (the EV's follower, MBecu1/1soc/2); empty if none
+  AnyParams ecu;
   EcuTiming ecu_timing;
   EcuCodec ecu_codec = EcuCodec::kNone;
   SolverSettings solver;

@@ -24,6 +24,8 @@ struct KindRead {
   std::optional<double> length_s;  // the cycle's or the profile's length: the default duration
   bool length_unknown = false;     // its table or profile has a problem, reported already
   bool has_ecu = false;            // a built-in ECU: its period and latency are checked
+  // where the ECU's parameters keep its period, once the timing is checked (nullptr: nowhere)
+  void (*set_ecu_period)(Scenario& out, double period_s) = nullptr;
 };
 
 // Reads the kind's tables from the vehicle reader into out (plant and ECU parameters, ECU

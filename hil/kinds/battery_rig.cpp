@@ -50,14 +50,14 @@ KindRead read_battery_rig_kind(Reader& vr, const KindInput& in, Scenario& out, P
 }  // namespace
 
 // battery_rig: Batt1 on a current / power profile
-extern const VehicleKind kBatteryRig{
-    "battery_rig", read_battery_rig_kind,
+extern const VehicleKind kind_battery_rig{
+    "battery_rig", &typeid(plant::BatteryRigParams), read_battery_rig_kind,
     [](const Scenario& sc, const SimulationOptions& opt) {
       return simulate(sc, opt,
-                      std::make_unique<const plant::BatteryRig>(std::get<plant::BatteryRigParams>(sc.plant)),
+                      std::make_unique<const plant::BatteryRig>(sc.plant.get<plant::BatteryRigParams>()),
                       std::unique_ptr<NoController>());
     },
-    [](const Scenario& sc) { return signals_of(plant::BatteryRig(std::get<plant::BatteryRigParams>(sc.plant))); }};
+    [](const Scenario& sc) { return signals_of(plant::BatteryRig(sc.plant.get<plant::BatteryRigParams>())); }};
 
 
 }  // namespace ehpt::hil::kinds

@@ -39,13 +39,13 @@ KindRead read_bev_kind(Reader& vr, const KindInput& in, Scenario& out, Problems&
 }  // namespace
 
 // bev: the map-based EV with its driver-follower ECU
-extern const VehicleKind kBev{
-    "bev", read_bev_kind,
+extern const VehicleKind kind_bev{
+    "bev", &typeid(plant::BevParams), read_bev_kind,
     [](const Scenario& sc, const SimulationOptions& opt) {
-      return simulate(sc, opt, std::make_unique<const plant::BevPlant>(std::get<plant::BevParams>(sc.plant)),
+      return simulate(sc, opt, std::make_unique<const plant::BevPlant>(sc.plant.get<plant::BevParams>()),
                       std::make_unique<ecu::EvFollower>());
     },
-    [](const Scenario& sc) { return signals_of(plant::BevPlant(std::get<plant::BevParams>(sc.plant))); }};
+    [](const Scenario& sc) { return signals_of(plant::BevPlant(sc.plant.get<plant::BevParams>())); }};
 
 
 }  // namespace ehpt::hil::kinds

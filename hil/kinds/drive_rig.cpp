@@ -56,13 +56,13 @@ KindRead read_drive_rig_kind(Reader& vr, const KindInput& in, Scenario& out, Pro
 }  // namespace
 
 // drive_rig: TestMBOneFlange / TestTwoFlange
-extern const VehicleKind kDriveRig{
-    "drive_rig", read_drive_rig_kind,
+extern const VehicleKind kind_drive_rig{
+    "drive_rig", &typeid(plant::DriveRigParams), read_drive_rig_kind,
     [](const Scenario& sc, const SimulationOptions& opt) {
-      return simulate(sc, opt, std::make_unique<const plant::DriveRig>(std::get<plant::DriveRigParams>(sc.plant)),
+      return simulate(sc, opt, std::make_unique<const plant::DriveRig>(sc.plant.get<plant::DriveRigParams>()),
                       std::unique_ptr<NoController>());
     },
-    [](const Scenario& sc) { return signals_of(plant::DriveRig(std::get<plant::DriveRigParams>(sc.plant))); }};
+    [](const Scenario& sc) { return signals_of(plant::DriveRig(sc.plant.get<plant::DriveRigParams>())); }};
 
 
 }  // namespace ehpt::hil::kinds

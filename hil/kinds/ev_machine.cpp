@@ -52,14 +52,14 @@ KindRead read_machine_ev(Reader& vr, const KindInput& in, Scenario& out, Problem
 template <class Drive>
 std::unique_ptr<Simulation> make_machine_ev(const Scenario& sc, const SimulationOptions& opt) {
   using P = plant::EvMachinePlant<Drive>;
-  return simulate(sc, opt, std::make_unique<const P>(std::get<typename P::Params>(sc.plant)),
+  return simulate(sc, opt, std::make_unique<const P>(sc.plant.get<typename P::Params>()),
                   std::make_unique<ecu::EvFollower>());
 }
 
 template <class Drive>
 std::vector<SignalInfo> machine_ev_signals(const Scenario& sc) {
   using P = plant::EvMachinePlant<Drive>;
-  return signals_of(P(std::get<typename P::Params>(sc.plant)));
+  return signals_of(P(sc.plant.get<typename P::Params>()));
 }
 
 // [drive] of an ev_am vehicle: the machine in SI units (AMDrive), or with per_unit = true in
@@ -90,8 +90,8 @@ plant::AmDriveParams read_am_drive_any(Reader r, Problems& problems, bool& per_u
 }  // namespace
 
 // ev_am: EvAm_bat, the EV with AMDrive (U/f, slip from the torque request, slip limiter)
-extern const VehicleKind kEvAm{
-    "ev_am",
+extern const VehicleKind kind_ev_am{
+    "ev_am", &typeid(plant::EvAmParams),
     [](Reader& vr, const KindInput& in, Scenario& out, Problems& problems, Problems& warnings, Context& ctx) {
       bool per_unit = false;
       Problems found;
@@ -111,8 +111,8 @@ extern const VehicleKind kEvAm{
     make_machine_ev<plant::AmMachine>, machine_ev_signals<plant::AmMachine>};
 
 // ev_pm: EvPm_bat, the EV with PMDrive (MTPA, flux weakening, current limit)
-extern const VehicleKind kEvPm{
-    "ev_pm",
+extern const VehicleKind kind_ev_pm{
+    "ev_pm", &typeid(plant::EvPmParams),
     [](Reader& vr, const KindInput& in, Scenario& out, Problems& problems, Problems& warnings, Context& ctx) {
       return read_machine_ev<plant::PmMachine>(vr, in, out, problems, warnings, ctx,
                                                [](Reader r, Context&) { return read_pm_drive(r); });

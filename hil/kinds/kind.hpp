@@ -6,6 +6,8 @@
 
 #include <memory>
 #include <optional>
+#include <span>
+#include <typeinfo>
 #include <string_view>
 #include <vector>
 
@@ -19,16 +21,20 @@ namespace ehpt::hil::kinds {
 
 using namespace detail;
 
+// A vehicle kind, defined in its own file as `extern const VehicleKind kind_<name>{...}` and
+// listed in the build by one line, ehpt_kind_file(<file> <name>...) in CMakeLists.txt, which
+// generates the table (all_kinds()). Nothing else names a kind: load_scenario finds its reader by
+// `kind`, make_simulation and scenario_signals find it by the type of its parameters.
 struct VehicleKind {
-  std::string_view name;  // `kind` in the vehicle file
+  std::string_view name;            // `kind` in the vehicle file
+  const std::type_info* params;     // what its reader puts into Scenario::plant
   ReadKind read;
   std::unique_ptr<Simulation> (*make)(const Scenario&, const SimulationOptions&);
   std::vector<SignalInfo> (*signals)(const Scenario&);
 };
 
-extern const VehicleKind kBev, kPsd, kDriveRig, kBatteryRig;
-extern const VehicleKind kEvPm, kEvAm;
-extern const VehicleKind kPmDriveTest, kAmDriveTest;  // hil/kinds/machine_tests.cpp
+// Every kind, in the order of their build lines (generated: <build>/generated/kinds_table.cpp).
+std::span<const VehicleKind* const> all_kinds();
 
 // One kind: its plant (and ECU) from the scenario, with the scenario's solver.
 template <class Plant, class Controller = NoController>

@@ -54,27 +54,27 @@ KindRead read_am_test(Reader& vr, const KindInput& in, Scenario& out, Problems& 
 }  // namespace
 
 // pm_drive_test: TestPMDrive (SmaAllSpeeds-like), PMDrive vs a current-fed time-domain PMSM
-extern const VehicleKind kPmDriveTest{
-    "pm_drive_test", read_pm_test,
+extern const VehicleKind kind_pm_drive_test{
+    "pm_drive_test", &typeid(plant::PmDriveTestParams), read_pm_test,
     [](const Scenario& sc, const SimulationOptions& opt) {
       return simulate(sc, opt,
-                      std::make_unique<const plant::PmDriveTest>(std::get<plant::PmDriveTestParams>(sc.plant)),
+                      std::make_unique<const plant::PmDriveTest>(sc.plant.get<plant::PmDriveTestParams>()),
                       std::unique_ptr<NoController>());
     },
     [](const Scenario& sc) {
-      return signals_of(plant::PmDriveTest(std::get<plant::PmDriveTestParams>(sc.plant)));
+      return signals_of(plant::PmDriveTest(sc.plant.get<plant::PmDriveTestParams>()));
     }};
 
 // am_drive_test: TestAMDrive, AMDrive vs a U/f-fed time-domain squirrel-cage machine
-extern const VehicleKind kAmDriveTest{
-    "am_drive_test", read_am_test,
+extern const VehicleKind kind_am_drive_test{
+    "am_drive_test", &typeid(plant::AmDriveTestParams), read_am_test,
     [](const Scenario& sc, const SimulationOptions& opt) {
       return simulate(sc, opt,
-                      std::make_unique<const plant::AmDriveTest>(std::get<plant::AmDriveTestParams>(sc.plant)),
+                      std::make_unique<const plant::AmDriveTest>(sc.plant.get<plant::AmDriveTestParams>()),
                       std::unique_ptr<NoController>());
     },
     [](const Scenario& sc) {
-      return signals_of(plant::AmDriveTest(std::get<plant::AmDriveTestParams>(sc.plant)));
+      return signals_of(plant::AmDriveTest(sc.plant.get<plant::AmDriveTestParams>()));
     }};
 
 }  // namespace ehpt::hil::kinds

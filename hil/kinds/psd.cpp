@@ -89,6 +89,8 @@ KindRead read_psd_kind(Reader& vr, const KindInput& in, Scenario& out, Problems&
   }
   check_signals(plant::PsdPlant::kSignals, out.output.signals, ctx);
   KindRead r{cycle_length(p.driver), false, true};
+  // MBecu's filters and integrators step with the ECU period load_scenario settles on
+  r.set_ecu_period = [](Scenario& s, double period_s) { s.ecu.get<ecu::PsdEcuParams>().period_s = period_s; };
   out.plant = std::move(p);
   out.ecu = std::move(e);
   return r;
@@ -97,15 +99,15 @@ KindRead read_psd_kind(Reader& vr, const KindInput& in, Scenario& out, Problems&
 }  // namespace
 
 // psd: the power-split hybrid with MBecu1 / MBecu1soc / MBecu2
-extern const VehicleKind kPsd{
-    "psd", read_psd_kind,
+extern const VehicleKind kind_psd{
+    "psd", &typeid(plant::PsdParams), read_psd_kind,
     [](const Scenario& sc, const SimulationOptions& opt) {
-      const auto& p = std::get<plant::PsdParams>(sc.plant);
-      const auto& e = std::get<ecu::PsdEcuParams>(sc.ecu);
+      const auto& p = sc.plant.get<plant::PsdParams>();
+      const auto& e = sc.ecu.get<ecu::PsdEcuParams>();
       return simulate(sc, opt, std::make_unique<const plant::PsdPlant>(p), std::make_unique<ecu::PsdEcu>(e, e.period_s),
                       p.ice.fuel_density_kg_m3);
     },
-    [](const Scenario& sc) { return signals_of(plant::PsdPlant(std::get<plant::PsdParams>(sc.plant))); }};
+    [](const Scenario& sc) { return signals_of(plant::PsdPlant(sc.plant.get<plant::PsdParams>())); }};
 
 
 }  // namespace ehpt::hil::kinds

@@ -1,18 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// The table of vehicle kinds: one entry each, defined in hil/kinds/<kind>.cpp
-// {name, reader, factory, signals}. This is the only place that maps a vehicle file's `kind`
-// and a scenario's parameters to C++ types; load_scenario, the CLI and the batch runner go
-// through it. A new kind is one file in hil/kinds/ and one line here.
+// The vehicle kinds as one table (all_kinds(), generated from the build lines
+// ehpt_kind_file(...) in CMakeLists.txt; each kind is defined in hil/kinds/<file>.cpp). This is
+// the only place that maps a vehicle file's `kind` and a scenario's parameters to a kind;
+// load_scenario, the CLI and the batch runner go through it. A new kind is one file in
+// hil/kinds/ and its build line.
+#include <stdexcept>
 #include <string>
 
-#include "hil/kinds/kind.hpp"
 #include "hil/config/scenario.hpp"
-#include "plant/battery_rig.hpp"
-#include "plant/bev_plant.hpp"
-#include "plant/drive_rigs.hpp"
-#include "plant/ev_machine_plant.hpp"
-#include "plant/machine_test_rigs.hpp"
-#include "plant/psd_plant.hpp"
+#include "hil/kinds/kind.hpp"
 
 namespace ehpt::hil {
 
@@ -20,21 +16,12 @@ namespace {
 
 using kinds::VehicleKind;
 
-const VehicleKind* const kKinds[] = {&kinds::kBev, &kinds::kPsd, &kinds::kDriveRig, &kinds::kBatteryRig,
-                                     &kinds::kEvPm, &kinds::kEvAm, &kinds::kPmDriveTest, &kinds::kAmDriveTest};
-
 const VehicleKind& kind_of(const Scenario& sc) {
-  struct Pick {
-    const VehicleKind& operator()(const plant::BevParams&) const { return kinds::kBev; }
-    const VehicleKind& operator()(const plant::PsdParams&) const { return kinds::kPsd; }
-    const VehicleKind& operator()(const plant::DriveRigParams&) const { return kinds::kDriveRig; }
-    const VehicleKind& operator()(const plant::BatteryRigParams&) const { return kinds::kBatteryRig; }
-    const VehicleKind& operator()(const plant::EvPmParams&) const { return kinds::kEvPm; }
-    const VehicleKind& operator()(const plant::EvAmParams&) const { return kinds::kEvAm; }
-    const VehicleKind& operator()(const plant::PmDriveTestParams&) const { return kinds::kPmDriveTest; }
-    const VehicleKind& operator()(const plant::AmDriveTestParams&) const { return kinds::kAmDriveTest; }
-  };
-  return std::visit(Pick{}, sc.plant);
+  for (const VehicleKind* k : kinds::all_kinds()) {
+    if (sc.plant.type() == *k->params) return *k;
+  }
+  // only a Scenario that load_scenario did not fill (a caller's bug): say which
+  throw std::logic_error("scenario '" + sc.name + "' holds no vehicle of a known kind (kind \"" + sc.kind + "\")");
 }
 
 }  // namespace
@@ -65,7 +52,7 @@ std::vector<SignalInfo> scenario_signals(const Scenario& sc) { return kind_of(sc
 namespace detail {
 
 ReadKind find_kind_reader(std::string_view name) {
-  for (const VehicleKind* k : kKinds) {
+  for (const VehicleKind* k : kinds::all_kinds()) {
     if (k->name == name) return k->read;
   }
   return nullptr;
@@ -73,9 +60,10 @@ ReadKind find_kind_reader(std::string_view name) {
 
 std::string kind_names() {
   std::string names;
-  const std::size_t n = std::size(kKinds);
+  const auto kinds = kinds::all_kinds();
+  const std::size_t n = kinds.size();
   for (std::size_t i = 0; i < n; ++i) {
-    names += (i == 0 ? "" : i + 1 == n ? " or " : ", ") + ("\"" + std::string(kKinds[i]->name) + "\"");
+    names += (i == 0 ? "" : i + 1 == n ? " or " : ", ") + ("\"" + std::string(kinds[i]->name) + "\"");
   }
   return names;
 }

@@ -395,41 +395,30 @@ bool run_cvode_reference(const Scenario& sc, const ReferenceOptions& opt, Refere
     why = "the scenario's solver settings are not valid (load it with load_scenario)";
     return false;
   }
-  struct Visit {
-    const Scenario& sc;
-    const ReferenceOptions& opt;
-    ReferenceResult& out;
-    std::string& why;
-    bool operator()(const plant::BevParams& p) const {
-      const plant::BevPlant plant(p);
-      return run_with(sc, opt, plant, std::make_unique<ecu::EvFollower>(), out, why);
-    }
-    bool operator()(const plant::PsdParams& p) const {
-      const auto* e = std::get_if<ecu::PsdEcuParams>(&sc.ecu);
-      if (e == nullptr) return no("psd without its ECU parameters");
-      const plant::PsdPlant plant(p);
-      return run_with(sc, opt, plant, std::make_unique<ecu::PsdEcu>(*e, e->period_s), out, why,
-                      p.ice.fuel_density_kg_m3);
-    }
-    bool operator()(const plant::EvPmParams& p) const {
-      const plant::EvPmPlant plant(p);
-      return run_with(sc, opt, plant, std::make_unique<ecu::EvFollower>(), out, why);
-    }
-    bool operator()(const plant::EvAmParams& p) const {
-      const plant::EvAmPlant plant(p);
-      return run_with(sc, opt, plant, std::make_unique<ecu::EvFollower>(), out, why);
-    }
-    bool operator()(const plant::DriveRigParams&) const { return no("drive_rig"); }
-    bool operator()(const plant::BatteryRigParams&) const { return no("battery_rig"); }
-    bool operator()(const plant::PmDriveTestParams&) const { return no("pm_drive_test"); }
-    bool operator()(const plant::AmDriveTestParams&) const { return no("am_drive_test"); }
-    bool no(const char* kind) const {
-      why = std::string("kind ") + kind +
-            ": no CVODE reference (it covers the vehicles with a built-in ECU: bev, psd, ev_pm, ev_am)";
+  if (const auto* p = sc.plant.get_if<plant::BevParams>()) {
+    const plant::BevPlant plant(*p);
+    return run_with(sc, opt, plant, std::make_unique<ecu::EvFollower>(), out, why);
+  }
+  if (const auto* p = sc.plant.get_if<plant::PsdParams>()) {
+    const auto* e = sc.ecu.get_if<ecu::PsdEcuParams>();
+    if (e == nullptr) {
+      why = "psd without its ECU parameters";
       return false;
     }
-  };
-  return std::visit(Visit{sc, opt, out, why}, sc.plant);
+    const plant::PsdPlant plant(*p);
+    return run_with(sc, opt, plant, std::make_unique<ecu::PsdEcu>(*e, e->period_s), out, why,
+                    p->ice.fuel_density_kg_m3);
+  }
+  if (const auto* p = sc.plant.get_if<plant::EvPmParams>()) {
+    const plant::EvPmPlant plant(*p);
+    return run_with(sc, opt, plant, std::make_unique<ecu::EvFollower>(), out, why);
+  }
+  if (const auto* p = sc.plant.get_if<plant::EvAmParams>()) {
+    const plant::EvAmPlant plant(*p);
+    return run_with(sc, opt, plant, std::make_unique<ecu::EvFollower>(), out, why);
+  }
+  why = "kind " + sc.kind + ": no CVODE reference (it covers the vehicles with a built-in ECU: bev, psd, ev_pm, ev_am)";
+  return false;
 }
 
 }  // namespace ehpt::hil

@@ -32,7 +32,7 @@ TEST(Config, LoadsMbevWithUnitsConverted) {
   Scenario sc;
   std::vector<std::string> errors;
   ASSERT_TRUE(load_scenario(test::source_path("scenarios/ev_nedc.toml"), {}, sc, errors));
-  const auto& p = std::get<plant::BevParams>(sc.plant);
+  const auto& p = sc.plant.get<plant::BevParams>();
   EXPECT_EQ(p.body.mass_kg, 1300.0);
   EXPECT_EQ(p.drive.loss_model, plant::DriveLossModel::kMap);
   EXPECT_EQ(sc.solver.duration_s, 1184.0);  // the cycle's end
@@ -50,7 +50,7 @@ TEST(Config, OverridesFromTheCommandLineWin) {
                              "cycle=\"" + test::source_path("data/cycles/cycle_udds.csv") + "\""},
                             sc, errors))
       << errors[0];
-  const auto& p = std::get<plant::BevParams>(sc.plant);
+  const auto& p = sc.plant.get<plant::BevParams>();
   EXPECT_EQ(p.battery.soc_initial, 0.55);
   EXPECT_EQ(sc.solver.kind, SolverKind::kImplicitEuler);
   EXPECT_EQ(sc.solver.step_s, 0.002);
@@ -155,13 +155,13 @@ TEST(Config, IntegersAreRangeCheckedBeforeNarrowingAndPrintedAsWritten) {
   EXPECT_EQ(problems_with({"vehicle.battery.strings_parallel=0"}, sc).size(), 1u);
   EXPECT_EQ(problems_with({"vehicle.battery.strings_parallel=1.5"}, sc).size(), 1u);
   ASSERT_TRUE(problems_with({"vehicle.battery.cells_series=100000"}, sc).empty());
-  EXPECT_EQ(std::get<plant::BevParams>(sc.plant).battery.cells_series, 100000);
+  EXPECT_EQ(sc.plant.get<plant::BevParams>().battery.cells_series, 100000);
 }
 
 TEST(Config, TheLastSetOfAKeyWins) {
   Scenario sc;
   ASSERT_TRUE(problems_with({"vehicle.vehicle.mass_kg=1000", "vehicle.vehicle.mass_kg=1500"}, sc).empty());
-  EXPECT_EQ(std::get<plant::BevParams>(sc.plant).body.mass_kg, 1500.0);
+  EXPECT_EQ(sc.plant.get<plant::BevParams>().body.mass_kg, 1500.0);
   ASSERT_TRUE(problems_with({"solver.step_s=0.002", "solver.step_s=0.0005"}, sc).empty());
   EXPECT_EQ(sc.solver.step_s, 0.0005);
 }
@@ -179,7 +179,7 @@ TEST(Config, OneSetIsOneKeyALineBreakIsRefused) {
 TEST(Config, ACoastingCarHasGainZero) {
   Scenario sc;
   ASSERT_TRUE(problems_with({"vehicle.driver.gain=0"}, sc).empty());
-  EXPECT_EQ(std::get<plant::BevParams>(sc.plant).driver.gain, 0.0);
+  EXPECT_EQ(sc.plant.get<plant::BevParams>().driver.gain, 0.0);
   EXPECT_EQ(problems_with({"vehicle.driver.gain=-1"}, sc).size(), 1u);
 }
 
@@ -188,7 +188,7 @@ TEST(Config, RoadFormCanBeSwitchedWithSetAndTheOtherKeysAreIgnoredWithAWarning) 
   ASSERT_TRUE(problems_with({"vehicle.road.form=coast-down", "vehicle.road.f0_N=150", "vehicle.road.f2_N_s2_m2=0.4"},
                             sc)
                   .empty());
-  const auto& road = std::get<plant::BevParams>(sc.plant).road;
+  const auto& road = sc.plant.get<plant::BevParams>().road;
   EXPECT_EQ(road.form, plant::RoadLoadForm::kCoastDown);
   EXPECT_EQ(road.f0_N, 150.0);
   EXPECT_EQ(road.f2_N_s2_m2, 0.4);

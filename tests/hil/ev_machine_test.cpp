@@ -132,7 +132,7 @@ TEST(EvPmBat, ADriveSolveThatDoesNotConvergeIsAFaultBitNotACrash) {
   // a torque reference no solver can meet (NaN: a broken ECU in-process; the bus codecs
   // refuse it before it gets here): the fault bit, reported with the outputs and sensors
   const Scenario sc = test::load(test::source_path("scenarios/evpm_sort1.toml"));
-  const plant::EvPmPlant plant(std::get<plant::EvPmParams>(sc.plant));
+  const plant::EvPmPlant plant(sc.plant.get<plant::EvPmParams>());
   auto x = plant.initial_state();
   const auto m = plant.initial_modes(x);
   msgs::EvCommand u;
@@ -154,7 +154,7 @@ TEST(EvPmBat, TheSwitchToFluxWeakeningIsALocatedEvent) {
   // located inside the steps (not at step ends), each where the MTPA voltage meets U_lim
   const Scenario sc = test::load(test::source_path("scenarios/evpm_sort1.toml"));
   using P = plant::EvPmPlant;
-  const P plant(std::get<plant::EvPmParams>(sc.plant));
+  const P plant(sc.plant.get<plant::EvPmParams>());
   solvers::Rk4<P> rk4(plant);
   solvers::EventStepper<P, solvers::Rk4<P>> stepper(plant, rk4, 0.0, 1e-3);
   P::State x = plant.initial_state();
@@ -182,7 +182,7 @@ TEST(EvPmBat, TheSwitchToFluxWeakeningIsALocatedEvent) {
 TEST(EvPmBat, AccelerationIsTheClosedFormWithTheRotorReflected) {
   // (m + J (G/r)^2) dv/dt = Te G/r - fc m g - rho S Cx v^2 / 2, at 10 m/s and 100 N m asked
   const Scenario sc = test::load(test::source_path("scenarios/evpm_sort1.toml"));
-  const plant::EvPmParams& p = std::get<plant::EvPmParams>(sc.plant);
+  const plant::EvPmParams& p = sc.plant.get<plant::EvPmParams>();
   const plant::EvPmPlant plant(p);
   auto x = plant.initial_state();
   x[plant::EvPmPlant::kSpeed] = 10.0;

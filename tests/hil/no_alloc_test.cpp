@@ -3,6 +3,7 @@
 // around 1e5 steps after start-up, for every plant and solver.
 #include <gtest/gtest.h>
 
+#include "ecu/psd_ecu.hpp"
 #include "alloc_counter.hpp"
 #include "hil/config/config.hpp"
 #include "ecu/ev_follower.hpp"
@@ -55,9 +56,9 @@ TEST(NoAllocation, SimulationFacade) {
 
 TEST(NoAllocation, PowerSplitHybridWithItsEcu) {
   const hil::Scenario sc = test::load(test::source_path("scenarios/psecu2_nedc.toml"));
-  const auto& p = std::get<plant::PsdParams>(sc.plant);
+  const auto& p = sc.plant.get<plant::PsdParams>();
   const plant::PsdPlant plant(p);
-  ecu::PsdEcu ecu(std::get<ecu::PsdEcuParams>(sc.ecu), 1e-3);
+  ecu::PsdEcu ecu(sc.ecu.get<ecu::PsdEcuParams>(), 1e-3);
   using R = Runner<plant::PsdPlant, solvers::Rk4<plant::PsdPlant>, ecu::PsdEcu>;
   R runner(plant, 1e-3, 400000, 100, {0, 1, 2}, 400000, &ecu, 1);  // start-up: may allocate
   const std::size_t before = test::allocation_count();
@@ -72,7 +73,7 @@ TEST(NoAllocation, DriveRig) {
   Scenario sc;
   std::vector<std::string> errors;
   ASSERT_TRUE(load_scenario(test::source_path("scenarios/one_flange_test.toml"), {}, sc, errors));
-  const plant::DriveRig rig(std::get<plant::DriveRigParams>(sc.plant));
+  const plant::DriveRig rig(sc.plant.get<plant::DriveRigParams>());
   EXPECT_EQ((allocations_over_run<plant::DriveRig, solvers::Rk4<plant::DriveRig>>(rig, 50000)), 0u);
 }
 

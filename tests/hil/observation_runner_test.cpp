@@ -126,7 +126,7 @@ struct Psecu2 {
 };
 Psecu2 psecu2(const std::vector<std::string>& overrides = {}) {
   const Scenario sc = test::load(test::source_path("scenarios/psecu2_nedc.toml"), overrides);
-  return {std::get<plant::PsdParams>(sc.plant), std::get<ecu::PsdEcuParams>(sc.ecu), sc.solver.steps,
+  return {sc.plant.get<plant::PsdParams>(), sc.ecu.get<ecu::PsdEcuParams>(), sc.solver.steps,
           sc.solver.ecu_ratio};
 }
 
@@ -146,7 +146,7 @@ TEST(ObservationRunner, Psecu2NedcIsBitIdenticalToFullOutputsAtEveryStep) {
 
 TEST(ObservationRunner, MapEvNedcIsBitIdenticalToFullOutputsAtEveryStep) {
   const Scenario sc = test::load(test::source_path("scenarios/ev_nedc.toml"));
-  const auto& p = std::get<plant::BevParams>(sc.plant);
+  const auto& p = sc.plant.get<plant::BevParams>();
   const auto a = run<plant::BevPlant>(p, ecu::EvFollower{}, sc.solver.steps, 100, 50000, sc.solver.ecu_ratio);
   const auto b =
       run<FullOutputsOnly<plant::BevPlant>>(p, ecu::EvFollower{}, sc.solver.steps, 100, 50000, sc.solver.ecu_ratio);

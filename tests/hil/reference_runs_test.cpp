@@ -4,6 +4,11 @@
 
 #include <cmath>
 
+#include "plant/drive_rigs.hpp"
+#include "plant/bev_plant.hpp"
+#include "plant/psd_plant.hpp"
+#include "ecu/ev_follower.hpp"
+#include "ecu/psd_ecu.hpp"
 #include "hil/config/config.hpp"
 #include "hil/run/runner.hpp"
 #include "io/csv_table.hpp"
@@ -49,9 +54,9 @@ io::CsvTable reference(const std::string& name) {
 
 TEST(ReferenceRuns, PaperPsecu2OnNedc) {
   const Scenario sc = test::load(test::source_path("scenarios/psecu2_nedc.toml"));
-  const auto& p = std::get<plant::PsdParams>(sc.plant);
+  const auto& p = sc.plant.get<plant::PsdParams>();
   const plant::PsdPlant plant(p);
-  const auto& e = std::get<ecu::PsdEcuParams>(sc.ecu);
+  const auto& e = sc.ecu.get<ecu::PsdEcuParams>();
   ecu::PsdEcu controller(e, e.period_s);
   compare(sc, plant, reference("psecu2_nedc.csv"), &controller);
 }
@@ -59,12 +64,12 @@ TEST(ReferenceRuns, PaperPsecu2OnNedc) {
 TEST(ReferenceRuns, MapBasedEvOnNedc) {
   const Scenario sc = test::load(test::source_path("scenarios/ev_nedc.toml"));
   ecu::EvFollower follower;
-  compare(sc, plant::BevPlant(std::get<plant::BevParams>(sc.plant)), reference("ev_nedc.csv"), &follower);
+  compare(sc, plant::BevPlant(sc.plant.get<plant::BevParams>()), reference("ev_nedc.csv"), &follower);
 }
 
 TEST(ReferenceRuns, TestMBOneFlange) {
   const Scenario sc = test::load(test::source_path("scenarios/one_flange_test.toml"));
-  compare(sc, plant::DriveRig(std::get<plant::DriveRigParams>(sc.plant)), reference("one_flange_test.csv"));
+  compare(sc, plant::DriveRig(sc.plant.get<plant::DriveRigParams>()), reference("one_flange_test.csv"));
 }
 
 }  // namespace

@@ -67,7 +67,7 @@ TEST(Simulation, AnExternalMBecu2EveryTenMillisecondsReproducesTheBuiltInHybrid)
   ASSERT_TRUE(built_in && external);
   while (!built_in->finished()) built_in->run();
   const Scenario sc = test::load(test::source_path("scenarios/psecu2_nedc.toml"), sets);
-  ecu::PsdEcu ecu(std::get<ecu::PsdEcuParams>(sc.ecu), 0.01);
+  ecu::PsdEcu ecu(sc.ecu.get<ecu::PsdEcuParams>(), 0.01);
   msgs::PsdSensors sensors;
   msgs::PsdCommand command;  // held between updates, as the runner holds it
   while (!external->finished()) {

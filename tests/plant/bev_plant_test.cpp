@@ -176,7 +176,7 @@ TEST(TutorialFigures, MapBasedEvWhPerKmOnNedcAndWltc3) {
   for (const Case& c : {Case{"scenarios/ev_tutorial_nedc.toml", 116.0, 115.84, 111.5},
                         Case{"scenarios/ev_tutorial_wltc3.toml", 133.0, 133.32, 128.3}}) {
     const hil::Scenario sc = test::load(test::source_path(c.scenario));
-    const BevParams& p = std::get<BevParams>(sc.plant);
+    const BevParams& p = sc.plant.get<BevParams>();
     ASSERT_TRUE(p.brake.after_rotor_inertia && p.brake.library_gain) << c.scenario;
     ASSERT_EQ(p.driver.gain, 100.0);
     const DriveSummary s = drive_cycle(p, 1e-3, sc.solver.duration_s);
@@ -195,7 +195,7 @@ TEST(TutorialFigures, MapBasedEvWhPerKmOnNedcAndWltc3) {
 // deceleration even where the drive is not at its limit.
 TEST(BevBrake, AfterRotorInertiaSolvesItsLoopExactly) {
   const hil::Scenario sc = test::load(test::source_path("scenarios/ev_tutorial_nedc.toml"));
-  const BevParams& p = std::get<BevParams>(sc.plant);
+  const BevParams& p = sc.plant.get<BevParams>();
   const BevPlant plant(p);
   solvers::Rk4<BevPlant> rk4(plant);
   solvers::EventStepper<BevPlant, solvers::Rk4<BevPlant>> stepper(plant, rk4, 0.0, 1e-3);

@@ -18,7 +18,7 @@ DriveRigParams load_rig(const std::string& scenario) {
   hil::Scenario sc;
   std::vector<std::string> errors;
   EXPECT_TRUE(hil::load_scenario(test::source_path(scenario), {}, sc, errors)) << (errors.empty() ? "" : errors[0]);
-  return std::get<DriveRigParams>(sc.plant);
+  return sc.plant.get<DriveRigParams>();
 }
 
 // Outputs every step of h over duration_s (t = 0 included).

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Map-based ICE (MODELS.md §3) and the ICE test set-ups of §11.4.
+#include "plant/psd_plant.hpp"
 #include "plant/map_ice.hpp"
 
 #include <gtest/gtest.h>
@@ -15,7 +16,7 @@ namespace ehpt::plant {
 namespace {
 
 MapIceParams psd_ice() {
-  return std::get<PsdParams>(test::load(test::source_path("scenarios/psecu2_nedc.toml")).plant).ice;
+  return test::load(test::source_path("scenarios/psecu2_nedc.toml")).plant.get<PsdParams>().ice;
 }
 
 TEST(MapIce, FuelFlowIsSfcTimesPower) {

@@ -106,7 +106,7 @@ Seen compare_over_run(const Plant& plant, Ecu& ecu, std::int64_t steps, std::int
 
 TEST(Observation, MapEvOnNedcEqualsTheOutputsAtEveryGridPoint) {
   const hil::Scenario sc = test::load(test::source_path("scenarios/ev_nedc.toml"));
-  const BevPlant plant(std::get<BevParams>(sc.plant));
+  const BevPlant plant(sc.plant.get<BevParams>());
   ecu::EvFollower follower;
   const Seen seen = compare_over_run(plant, follower, sc.solver.steps, sc.solver.ecu_ratio);
   EXPECT_EQ(seen.mismatches, 0);
@@ -117,8 +117,8 @@ TEST(Observation, MapEvOnNedcEqualsTheOutputsAtEveryGridPoint) {
 
 TEST(Observation, Psecu2OnNedcEqualsTheOutputsAtEveryGridPoint) {
   const hil::Scenario sc = test::load(test::source_path("scenarios/psecu2_nedc.toml"));
-  const PsdPlant plant(std::get<PsdParams>(sc.plant));
-  const auto& ecu_params = std::get<ecu::PsdEcuParams>(sc.ecu);
+  const PsdPlant plant(sc.plant.get<PsdParams>());
+  const auto& ecu_params = sc.ecu.get<ecu::PsdEcuParams>();
   ecu::PsdEcu ecu(ecu_params, ecu_params.period_s);
   const Seen seen = compare_over_run(plant, ecu, sc.solver.steps, sc.solver.ecu_ratio);
   EXPECT_EQ(seen.mismatches, 0);
@@ -131,7 +131,7 @@ TEST(Observation, Psecu2OnNedcEqualsTheOutputsAtEveryGridPoint) {
 
 TEST(Observation, EvPmOnNedcEqualsTheOutputsAtEveryGridPoint) {
   const hil::Scenario sc = test::load(test::source_path("scenarios/evpm_nedc.toml"));
-  const EvPmPlant plant(std::get<EvPmParams>(sc.plant));
+  const EvPmPlant plant(sc.plant.get<EvPmParams>());
   ecu::EvFollower follower;
   const Seen seen = compare_over_run(plant, follower, sc.solver.steps, sc.solver.ecu_ratio);
   EXPECT_EQ(seen.mismatches, 0);
@@ -142,7 +142,7 @@ TEST(Observation, EvPmOnNedcEqualsTheOutputsAtEveryGridPoint) {
 
 TEST(Observation, EvAmOnSort1EqualsTheOutputsAtEveryGridPoint) {
   const hil::Scenario sc = test::load(test::source_path("scenarios/evam_sort1.toml"));
-  const EvAmPlant plant(std::get<EvAmParams>(sc.plant));
+  const EvAmPlant plant(sc.plant.get<EvAmParams>());
   ecu::EvFollower follower;
   const Seen seen = compare_over_run(plant, follower, sc.solver.steps, sc.solver.ecu_ratio);
   EXPECT_EQ(seen.mismatches, 0);
@@ -155,7 +155,7 @@ TEST(Observation, EvAmOnSort1EqualsTheOutputsAtEveryGridPoint) {
 // that is not finite, and a SOC outside its window, give the same bits as the outputs.
 TEST(Observation, FaultBitsEqualTheOutputs) {
   const hil::Scenario sc = test::load(test::source_path("scenarios/psecu2_nedc.toml"));
-  PsdParams p = std::get<PsdParams>(sc.plant);
+  PsdParams p = sc.plant.get<PsdParams>();
   p.battery.soc_max = 0.59;  // starts at 0.6: outside the window
   const PsdPlant plant(p);
   PsdPlant::State x = plant.initial_state();

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The power-split hybrid (MODELS.md §4, §5, §10.4) with its built-in ECUs.
+#include "ecu/psd_ecu.hpp"
 #include "plant/psd_plant.hpp"
 
 #include <gtest/gtest.h>
@@ -24,7 +25,7 @@ struct Psecu {
 };
 Psecu psecu(const std::string& scenario, const std::vector<std::string>& overrides = {}) {
   const hil::Scenario sc = test::load(test::source_path("scenarios/" + scenario), overrides);
-  return {std::get<PsdParams>(sc.plant), std::get<PsdEcuParams>(sc.ecu)};
+  return {sc.plant.get<PsdParams>(), sc.ecu.get<PsdEcuParams>()};
 }
 
 // What a drive() returns: the runner's counters and metrics.

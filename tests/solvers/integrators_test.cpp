@@ -408,7 +408,7 @@ struct PsdWithEveryColumn : ehpt::plant::PsdPlant {
 TEST(ImplicitEuler, SkippingAuditOnlyColumnsChangesNoBitInTheHybrid) {
   using ehpt::plant::PsdPlant;
   const ehpt::hil::Scenario sc = ehpt::test::load(ehpt::test::source_path("scenarios/psecu2_nedc.toml"));
-  const auto& p = std::get<ehpt::plant::PsdParams>(sc.plant);
+  const auto& p = sc.plant.get<ehpt::plant::PsdParams>();
   const PsdPlant marked(p);
   const PsdWithEveryColumn every(p);
   ehpt::solvers::ImplicitEuler<PsdPlant> a(marked);

@@ -72,7 +72,7 @@ plant::BevParams mbev(const std::string& cycle_file) {
                           errors)) {
     throw std::runtime_error(errors.empty() ? "load failed" : errors.front());
   }
-  return std::get<plant::BevParams>(sc.plant);
+  return sc.plant.get<plant::BevParams>();
 }
 
 }  // namespace ehpt::test

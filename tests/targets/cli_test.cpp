@@ -821,7 +821,7 @@ TEST(CliBatteryRig, ConstantCurrentDischargeFollowsTheClosedForm) {
   const Result r = ehpt_argv({"run", scenario, "--quiet", "--out", (root / "run").string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto sc = ehpt::test::load(scenario);
-  const auto& rig = std::get<ehpt::plant::BatteryRigParams>(sc.plant);
+  const auto& rig = sc.plant.get<ehpt::plant::BatteryRigParams>();
   const ehpt::plant::BatteryRcConstants k = ehpt::plant::derive(rig.battery);
   ASSERT_EQ(rig.profile[0].kind, ehpt::plant::BatterySegment::Kind::kCurrent);
   const double current_A = rig.profile[0].value, end_s = rig.profile[0].duration_s;
@@ -1023,7 +1023,7 @@ TEST(CliFaults, ChargingAboveSocMaxStopsTheRunWhenTheClosedFormSays) {
   const Result r = ehpt_argv(args);
   EXPECT_EQ(r.exit_code, 3) << r.err;
   const auto sc = ehpt::test::load(scenario, sets);
-  const auto k = ehpt::plant::derive(std::get<ehpt::plant::BatteryRigParams>(sc.plant).battery);
+  const auto k = ehpt::plant::derive(sc.plant.get<ehpt::plant::BatteryRigParams>().battery);
   const double charge_As = 0.05 * k.c_batt_F * (k.emf_max_V - k.emf_min_V);
   const double t_full = charge_As / (100.0 * (1.0 - k.k_parasitic));
   std::smatch m;
