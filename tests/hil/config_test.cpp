@@ -607,3 +607,160 @@ TEST_F(VehicleFiles, AnEnginesPeakTorqueOutsideItsBandWarns) {
 
 }  // namespace
 }  // namespace ehpt::hil
+
+// ---- validation rules without a test before (docs/validation-rules.md) -----------------------
+
+namespace ehpt::hil {
+namespace {
+
+std::vector<std::string> ev_sort1_with(const std::vector<std::string>& sets, Scenario& sc) {
+  std::vector<std::string> errors;
+  load_scenario(test::source_path("scenarios/ev_sort1.toml"), sets, sc, errors);
+  return errors;
+}
+
+TEST(ValidationRules, TheStepIsInZeroToOneSecond) {
+  Scenario sc;
+  for (const char* step : {"0", "-0.001", "1.5", "nan"}) {
+    const auto errors = ev_sort1_with({std::string("solver.step_s=") + step}, sc);
+    ASSERT_EQ(errors.size(), 1u) << step;
+    EXPECT_NE(errors[0].find("solver.step_s = "), std::string::npos);
+    EXPECT_NE(errors[0].find(": must be in (0, 1] s"), std::string::npos) << errors[0];
+  }
+  EXPECT_TRUE(ev_sort1_with({"solver.step_s=1", "solver.duration_s=150", "vehicle.ecu.period_s=0"}, sc).empty());
+}
+
+TEST(ValidationRules, ADurationThatIsNotAWholeNumberOfStepsWarnsWithTheEnd) {
+  Scenario sc;
+  ASSERT_TRUE(ev_sort1_with({"solver.duration_s=10.0004"}, sc).empty());
+  EXPECT_EQ(sc.solver.steps, 10000);
+  ASSERT_EQ(sc.warnings.size(), 1u);
+  EXPECT_NE(sc.warnings[0].find("solver.duration_s = 10.0004: not a whole number of steps; the run ends at t = 10 s"),
+            std::string::npos)
+      << sc.warnings[0];
+  ASSERT_TRUE(ev_sort1_with({"solver.duration_s=10"}, sc).empty());
+  EXPECT_TRUE(sc.warnings.empty());
+}
+
+TEST(ValidationRules, DecimationIsAtLeastOne) {
+  Scenario sc;
+  for (const char* d : {"0", "-3"}) {
+    const auto errors = ev_sort1_with({"output.interval_s=0.1", std::string("output.decimation=") + d}, sc);
+    bool found = false;
+    for (const auto& e : errors) found = found || e.find("output.decimation = " + std::string(d) + ": must be >= 1") != std::string::npos;
+    EXPECT_TRUE(found) << d << ": " << (errors.empty() ? "" : errors.back());
+  }
+}
+
+TEST(ValidationRules, AnEcuPeriodBelowHalfAStepIsRefused) {
+  Scenario sc;
+  const auto errors = ev_sort1_with({"vehicle.ecu.period_s=1e-13"}, sc);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_EQ(errors[0], "--set vehicle.ecu.period_s=1e-13: vehicle.ecu.period_s = 1e-13: must be > 0 (0: every step)");
+  const auto latency = ev_sort1_with({"vehicle.ecu.latency_s=0.0015"}, sc);
+  ASSERT_EQ(latency.size(), 1u);
+  EXPECT_NE(latency[0].find("vehicle.ecu.latency_s = 0.0015: must be a whole multiple of solver.step_s = 0.001"),
+            std::string::npos)
+      << latency[0];
+}
+
+// The map and cycle readers' own checks (hil/config/config_reader.cpp), at the CSV's line.
+class TableChecks : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = test::scratch_root() / ("tables_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  std::vector<std::string> with_map(const std::string& csv) {
+    std::ofstream(dir_ / "m.csv") << csv;
+    Scenario sc;
+    return ev_sort1_with({"vehicle.drive.efficiency_map=\"" + (dir_ / "m.csv").string() + "\""}, sc);
+  }
+  std::vector<std::string> with_cycle(const std::string& csv) {
+    std::ofstream(dir_ / "c.csv") << csv;
+    Scenario sc;
+    return ev_sort1_with({"cycle=\"" + (dir_ / "c.csv").string() + "\""}, sc);
+  }
+  std::string at(int line) const { return (dir_ / "m.csv").string() + ":" + std::to_string(line) + ": "; }
+  std::filesystem::path dir_;
+};
+
+TEST_F(TableChecks, AMapIsAFullSortedGrid) {
+  ASSERT_TRUE(with_map("t,w,eta\n0,0,0.9\n0,1,0.9\n1,0,0.9\n1,1,0.9\n").empty());
+  auto e = with_map("t,w,eta\n1,0,0.9\n1,1,0.9\n0,0,0.9\n0,1,0.9\n");
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_EQ(e[0], at(4) + "drive.efficiency_map, column t = 0: row axis must be strictly increasing");
+  e = with_map("t,w,eta\n0,1,0.9\n0,0,0.9\n1,1,0.9\n1,0,0.9\n");
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_EQ(e[0], at(3) + "drive.efficiency_map, column w = 0: column axis must be strictly increasing");
+  e = with_map("t,w,eta\n0,0,0.9\n0,1,0.9\n1,0,0.9\n");
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_EQ(e[0], (dir_ / "m.csv").string() + ": drive.efficiency_map: 3 rows, a full 2 x 2 grid needs 4");
+  e = with_map("t,w,eta\n0,0,0.9\n0,1,0.9\n1,1,0.9\n1,0,0.9\n");
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_EQ(e[0], at(4) + "drive.efficiency_map: grid point out of order (rows must be sorted by the first column, "
+                          "then the second)");
+  e = with_map("t,eta\n0,0.9\n1,0.9\n");
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_EQ(e[0], at(1) + "header: expected three columns (row axis, column axis, value)");
+}
+
+TEST_F(TableChecks, ACycleHasATimeAndASpeedColumn) {
+  ASSERT_TRUE(with_cycle("time_s,speed_m_s\n0,0\n10,5\n").empty());
+  const auto e = with_cycle("t,v\n0,0\n10,5\n");
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_EQ(e[0], (dir_ / "c.csv").string() + ":1: header: expected a time_s column and a speed_kmh or speed_m_s column "
+                                              "(found t, v)");
+}
+
+}  // namespace
+}  // namespace ehpt::hil
+
+namespace ehpt::hil {
+namespace {
+
+// Rules of plant/ and ecu/ validate() that no test named before (found by grepping the tests
+// for each field, then planting each defect): each refuses its value at load, named as set.
+TEST(ValidationRules, EachRangeOfTheRigsDriversAndEcusIsCheckedAtLoad) {
+  struct Case {
+    const char* scenario;
+    std::vector<std::string> sets;  // the last one is the bad value
+  };
+  for (const Case& c : std::initializer_list<Case>{
+           {"one_flange_test", {"vehicle.request.start_s=-1"}},
+           {"one_flange_test", {"vehicle.request.width_s=-1"}},
+           {"one_flange_test", {"vehicle.request.falling_s=0"}},
+           {"one_flange_test", {"vehicle.load.speed_initial_rad_s=nan"}},
+           {"one_flange_test", {"vehicle.load.torque_nominal_Nm=inf"}},
+           {"one_flange_test", {"vehicle.load.speed_nominal_rad_s=0"}},
+           {"one_flange_test", {"vehicle.load.flange_a_torque_Nm=nan"}},
+           {"one_flange_test", {"vehicle.dc_voltage_V=0"}},
+           {"ev_sort1", {"vehicle.drive.limit_ramp_fraction=0"}},
+           {"ev_sort1", {"vehicle.drive.limit_ramp_fraction=1.5"}},
+           {"ev_sort1", {"vehicle.drive.loss_model=formula", "vehicle.drive.loss_formula.b_w=-1"}},
+           {"ev_sort1", {"vehicle.drive.loss_model=formula", "vehicle.drive.loss_formula.b_p=-1"}},
+           {"ev_sort1", {"vehicle.driver.request_max=0"}},
+           {"ev_sort1", {"vehicle.driver.request_min=0.5"}},
+           {"psecu2_nedc", {"vehicle.ice.speed_initial_rad_s=nan"}},
+           {"psecu2_nedc", {"vehicle.ecu.max_torque_request_Nm=0"}},
+           {"psecu2_nedc", {"vehicle.ecu.gen_loop_gain_Nm_s_rad=-1"}},
+           {"psecu2_nedc", {"vehicle.ecu.gen_filter_s=0"}},
+           {"psecu2_nedc", {"vehicle.ecu.gen_torque_max_Nm=0"}},
+           {"psecu2_nedc", {"vehicle.ecu.ice_speed_min_rad_s=-1"}},
+           {"psecu2_nedc", {"vehicle.ecu.ice_off_speed_ref_rad_s=-1"}},
+       }) {
+    const std::string& bad = c.sets.back();
+    SCOPED_TRACE(bad);
+    Scenario sc;
+    std::vector<std::string> errors;
+    EXPECT_FALSE(load_scenario(test::source_path(std::string("scenarios/") + c.scenario + ".toml"), c.sets, sc, errors));
+    const std::string key = bad.substr(0, bad.find('='));
+    ASSERT_EQ(errors.size(), 1u) << (errors.empty() ? "" : errors[0] + " / " + errors.back());
+    EXPECT_EQ(errors[0].rfind("--set " + bad + ": " + key + " = ", 0), 0u) << errors[0];
+  }
+}
+
+}  // namespace
+}  // namespace ehpt::hil
