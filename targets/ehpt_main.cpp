@@ -123,12 +123,21 @@ const char* kRunHelp =
     "                   the files its ehpt-manifest.txt lists; a second run with the same\n"
     "                   --out stops at once (exit 1)\n"
     "  --set key=value  override a scenario key, repeatable (the last one of a key wins).\n"
-    "                   Vehicle keys take the prefix 'vehicle.':\n"
-    "                   --set vehicle.battery.soc_initial=0.6\n"
-    "                   --set solver.method=implicit-euler --set solver.step_s=0.002\n"
-    "                   --set output.interval_s=0.01 --set solver.duration_s=100\n"
-    "  --plot           draw the figures into DIR (as 'ehpt plot DIR'); a failed plot\n"
-    "                   keeps the run and exits 1\n"
+    "                   Values are TOML; bare words are text. The scenario's own keys:\n"
+    "                     --set solver.method=implicit-euler   (rk4 | implicit-euler)\n"
+    "                     --set solver.step_s=0.002 --set solver.duration_s=100\n"
+    "                     --set output.interval_s=0.01         (or output.decimation=N)\n"
+    "                     --set 'output.signals=[\"speed_m_s\",\"soc\"]'  ('ehpt signals')\n"
+    "                     --set output.timeseries=false        (summary.json only)\n"
+    "                     --set cycle_periodic=true            (repeat the cycle)\n"
+    "                   Vehicle keys: 'vehicle.', the vehicle file's table, the key:\n"
+    "                     --set vehicle.battery.soc_initial=0.6\n"
+    "                     --set vehicle.vehicle.mass_kg=1800   (the file's [vehicle] table)\n"
+    "                     --set vehicle.ecu.soc_ref=0.62\n"
+    "                   Every key of the scenario and vehicle files: docs/scenarios.md\n"
+    "  --plot           draw the figures into DIR (as 'ehpt plot DIR'; needs timeseries.csv,\n"
+    "                   refused with output.timeseries=false); a failed plot keeps the run\n"
+    "                   and exits 1\n"
     "  --quiet          print nothing but errors\n"
     "  --realtime       run in real time, the built-in ECU closing the loop (timing studies\n"
     "                   without a bus): one tick per period on absolute CLOCK_MONOTONIC\n"
@@ -198,7 +207,10 @@ const char* kReplayHelp =
 
 const char* kListHelp =
     "usage: ehpt list [--dir DIR]\n"
-    "Lists the scenarios in DIR (default: $EHPT_SCENARIOS, ./scenarios, or the source tree's).\n";
+    "Lists the scenarios (name and description) in DIR, else in the first of these folders\n"
+    "that exists (where 'ehpt run NAME' looks names up too): $EHPT_SCENARIOS, ./scenarios,\n"
+    "<prefix>/share/ehpt/scenarios for an installed ehpt (/usr/share/ehpt/scenarios from the\n"
+    "Debian package), the source tree's scenarios/ for an ehpt run from its build folder.\n";
 
 const char* kSignalsHelp =
     "usage: ehpt signals SCENARIO\n"
@@ -208,10 +220,27 @@ const char* kSignalsHelp =
 const char* kPlotHelp =
     "usage: ehpt plot DIR\n"
     "Draws PNG figures (speed, torques and limiter state, powers, SOC, locked flag) from\n"
-    "DIR/timeseries.csv into DIR, with tools/plot.py under /usr/bin/python3. A figure\n"
-    "replaces a file of the same name only if DIR's ehpt-manifest.txt lists it.\n"
+    "DIR/timeseries.csv into DIR with plot.py under /usr/bin/python3 (matplotlib). plot.py\n"
+    "is taken from $EHPT_TOOLS_DIR, else <prefix>/libexec/ehpt for an installed ehpt\n"
+    "(/usr/libexec/ehpt from the Debian package), else the source tree's tools/ for an ehpt\n"
+    "run from its build folder. A figure replaces a file of the same name only if DIR's\n"
+    "ehpt-manifest.txt lists it.\n"
     "On a sweep folder ('ehpt sweep --out DIR'): fuel (or battery Wh/km) against final SOC,\n"
     "one panel per scenario, coloured by each swept parameter (sweep_*.png).\n";
+
+// The list and plot helps end with where this ehpt looks (build folder or installed).
+std::string list_help() {
+  const std::string dir = ehpt::hil::scenarios_dir();
+  return std::string(kListHelp) + "This ehpt: " +
+         (dir.empty() ? "no scenarios folder found (looked in " + ehpt::hil::scenarios_search_text() + ")"
+                      : (dir == "scenarios" ? "./scenarios" : dir)) +
+         "\n";
+}
+
+std::string plot_help() {
+  const std::string tools = ehpt::hil::tools_dir();
+  return std::string(kPlotHelp) + "This ehpt: " + (tools.empty() ? "no plot tool found" : tools + "/plot.py") + "\n";
+}
 
 bool wants_help(const std::vector<std::string>& args) {
   for (const auto& a : args) {
@@ -459,6 +488,13 @@ int cmd_run(const std::vector<std::string>& args) {
   ehpt::hil::Scenario sc;
   if (const int rc = load(scenario, sets, sc); rc != 0) return rc;
   if (const int rc = check_realtime(rt, sc); rc != 0) return rc;
+  if (do_plot && !sc.output.timeseries) {
+    // refused before the run: the figures are drawn from timeseries.csv, which it would not write
+    std::cerr << "error: --plot draws its figures from timeseries.csv, but output.timeseries = false (the scenario "
+                 "or a --set) writes none: drop --plot, or drop output.timeseries = false "
+                 "(--set output.timeseries=true); nothing was run.\n";
+    return 2;
+  }
   if (!quiet) {
     for (const auto& w : sc.warnings) std::cerr << "warning: " << w << "\n";
   }
@@ -823,12 +859,12 @@ int cmd_replay(const std::vector<std::string>& args) {
 }
 
 int cmd_list(const std::vector<std::string>& args) {
-  if (wants_help(args)) return out(kListHelp) ? 0 : 1;
+  if (wants_help(args)) return out(list_help()) ? 0 : 1;
   std::string dir = ehpt::hil::scenarios_dir();
   if (args.size() == 2 && args[0] == "--dir") {
     dir = args[1];
   } else if (!args.empty()) {
-    std::cerr << kListHelp;
+    std::cerr << list_help();
     return 1;
   }
   if (dir.empty()) {
@@ -873,10 +909,10 @@ int cmd_signals(const std::vector<std::string>& args) {
 int cmd_plot(const std::vector<std::string>& args) {
   if (wants_help(args) || args.size() != 1) {
     if (args.size() != 1) {
-      std::cerr << kPlotHelp;
+      std::cerr << plot_help();
       return 1;
     }
-    return out(kPlotHelp) ? 0 : 1;
+    return out(plot_help()) ? 0 : 1;
   }
   return plot_existing(args[0], false);
 }
