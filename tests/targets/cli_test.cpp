@@ -27,7 +27,7 @@
 
 #include "io/csv_table.hpp"
 #include "io/json_value.hpp"
-#include "io/output_dir.hpp"
+#include "io/json_writer.hpp"
 #include "io/sha256.hpp"
 #include "plant/battery_rig.hpp"
 #include "test_plants.hpp"

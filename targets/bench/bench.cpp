@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// `ehpt bench`: the timing and determinism suite (targets/bench.hpp). Everything it runs
+// `ehpt bench`: the timing and determinism suite (targets/bench/bench.hpp). Everything it runs
 // outside its own process is this binary (/proc/self/exe) or cyclictest, started with an
 // argument vector (never a shell), in a process group of its own, waited for with a
 // deadline and ended (SIGINT, then SIGKILL) on a timeout or a stop signal.
@@ -17,7 +17,7 @@
 // The folder is made fresh, or must be empty or an earlier bench (bench.json with our format
 // line and nothing but the names above); the run folders inside follow ehpt's own rules.
 
-#include "targets/bench.hpp"
+#include "targets/bench/bench.hpp"
 
 #include <arpa/inet.h>
 #include <fcntl.h>

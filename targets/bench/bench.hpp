@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
-// `ehpt bench`: the timing and determinism benchmark suite in one command (targets/bench.cpp).
+// `ehpt bench`: the timing and determinism benchmark suite in one command (targets/bench/).
 // In one run on one machine it measures (a) ns per step of each vehicle x solver at 1 ms,
 // (b) the real-time factor of each vehicle on its cycle, (c) the real-time loop's wake-up
 // latency next to cyclictest's (same period, priority and CPU), (d) heap allocations after
