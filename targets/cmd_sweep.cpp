@@ -28,7 +28,7 @@ const char* const kSweepHelp =
     "       ehpt sweep --status DIR\n"
     "\n"
     "Runs every run of a campaign (campaigns/*.toml: scenarios x [grid] x variants; the format\n"
-    "is in hil/campaign/campaign.hpp and the README, \"Campaigns\") as 'ehpt run' and merges the\n"
+    "is in docs/campaigns.md) as 'ehpt run' and merges the\n"
     "summaries into DIR/results.csv and DIR/results.jsonl (one row per run: its id, scenario\n"
     "and swept values, then every summary.json key). A run's id is a hash of the bytes of\n"
     "every file it reads and of its overrides: the campaign again into the same DIR runs only\n"

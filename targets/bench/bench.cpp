@@ -29,8 +29,7 @@
 #include "targets/bench/report.hpp"
 #include "targets/bench/sections.hpp"
 
-
-const char* const kBenchHelp =
+const char* const ehpt::cli::kBenchHelp =
     "usage: ehpt bench [--quick] [--out DIR] [--cpu N] [--priority P] [--rt-seconds S] [--quiet]\n"
     "\n"
     "The timing and determinism benchmark, in one run on this machine; prints a table and\n"
@@ -128,7 +127,7 @@ int parse_options(const std::vector<std::string>& args, Options& o) {
 }  // namespace
 }  // namespace ehpt::bench
 
-int cmd_bench(const std::vector<std::string>& args) {
+int ehpt::cli::cmd_bench(const std::vector<std::string>& args) {
   using namespace ehpt::bench;
   for (const auto& a : args) {
     if (a == "--help" || a == "-h") return write_stdout(kBenchHelp) ? 0 : 1;

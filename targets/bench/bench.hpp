@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+namespace ehpt::cli {
+
 // The usage text of `ehpt bench --help`.
 extern const char* const kBenchHelp;
 
@@ -19,3 +21,5 @@ extern const char* const kBenchHelp;
 // bench.json not written), 3 a run failed or trajectories that must be equal differ,
 // 128 + N stopped by signal N (130 Ctrl-C; bench.json holds what was done).
 int cmd_bench(const std::vector<std::string>& args);
+
+}  // namespace ehpt::cli
