@@ -20,6 +20,10 @@
 #include <utility>
 #include <vector>
 
+// The JSON writer (JsonObject, json_escape) is io/json_writer.hpp; included here because every
+// writer of an output folder writes its summary.json with it.
+#include "io/json_writer.hpp"
+
 namespace ehpt::io {
 
 inline constexpr const char* kManifestName = "ehpt-manifest.txt";
@@ -85,25 +89,6 @@ class OutputDir {
   std::vector<std::string> warnings_;
 };
 
-// Minimal ordered JSON object writer for summary.json (numbers exact, NaN as null).
-class JsonObject {
- public:
-  void number(const std::string& key, double value);
-  void integer(const std::string& key, long long value);
-  void text(const std::string& key, const std::string& value);
-  void boolean(const std::string& key, bool value);
-  void null(const std::string& key);
-  void object(const std::string& key, const JsonObject& value);
-  void strings(const std::string& key, const std::vector<std::string>& values);
-  void objects(const std::string& key, const std::vector<JsonObject>& values);  // one line each
-  std::string str(int indent = 0) const;
-  std::string compact() const;  // on one line: {"a": 1, "b": "x"}
-
- private:
-  std::vector<std::pair<std::string, std::string>> items_;  // key, raw JSON text
-};
-
-std::string json_escape(const std::string& s);
 
 // Writes content to path via a temporary name in the same folder and rename, so a reader
 // never sees half a file. The temporary is made with O_EXCL (never an existing file).

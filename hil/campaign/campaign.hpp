@@ -2,7 +2,7 @@
 #pragma once
 // A SIL campaign (campaigns/*.toml): base scenarios x a grid of overrides x a list of
 // variants, expanded into runs with content-addressed ids. Start-up only; `ehpt sweep`
-// (targets/sweep.cpp) runs them.
+// (hil/campaign/sweep_*.hpp, from targets/cmd_sweep.cpp) runs them.
 //
 //   description = "MBecu2 calibration"
 //   scenarios = ["psecu2_nedc", "../my/scenario.toml"]   # names as for 'ehpt run', or paths

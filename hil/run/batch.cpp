@@ -586,8 +586,9 @@ std::string summary_text(const Scenario& sc, const Report& r) {
     s += buf;
   }
   if (mt.has_engine) {
-    std::snprintf(buf, sizeof buf, "fuel          %.1f g, %.2f L/100 km; engine on %.1f s, %lld starts\n", r.fuel_g,
-                  r.fuel_L_per_100km, mt.engine_on_time_s, static_cast<long long>(mt.engine_starts));
+    std::snprintf(buf, sizeof buf, "fuel          %.1f g, %.2f L/100 km; engine on %.1f s, %lld start%s\n", r.fuel_g,
+                  r.fuel_L_per_100km, mt.engine_on_time_s, static_cast<long long>(mt.engine_starts),
+                  mt.engine_starts == 1 ? "" : "s");
     s += buf;
   }
   std::snprintf(buf, sizeof buf, "energy audit  residual %.3g J (relative %.2g)\n", r.audit.residual_J, r.relative);

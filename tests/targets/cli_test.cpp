@@ -14,6 +14,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -26,6 +27,7 @@
 
 #include "io/csv_table.hpp"
 #include "io/json_value.hpp"
+#include "io/json_writer.hpp"
 #include "io/sha256.hpp"
 #include "plant/battery_rig.hpp"
 #include "test_plants.hpp"
@@ -1316,6 +1318,131 @@ TEST(CliOutputs, AFolderNamedLikeAScenarioDoesNotHideIt) {
   const Result r2 = wait_ehpt(pid2, "shadow2");
   EXPECT_EQ(r2.exit_code, 2);
   EXPECT_HAS(r2.err, "not_a_scenario: is a folder, not a scenario file");
+}
+
+
+// ---- the help texts and the summary line (issue 21) --------------------------------------
+
+// The "--set key=value" examples of a help text, as a shell would pass them ('...' unquoted).
+std::vector<std::string> set_examples(const std::string& help) {
+  std::vector<std::string> sets;
+  const std::regex example(R"(--set ('[^']+'|[^ \n]+))");
+  for (std::sregex_iterator it(help.begin(), help.end(), example), end; it != end; ++it) {
+    std::string v = (*it)[1].str();
+    if (v.front() == '\'') v = v.substr(1, v.size() - 2);
+    if (v != "key=value") sets.push_back(v);
+  }
+  return sets;
+}
+
+// Every key 'ehpt run --help' shows is one the loader takes, with the value shown: all of them
+// at once on the shipped hybrid run (exit 0), each changing what summary.json records.
+TEST(CliHelp, EveryKeyTheRunHelpShowsIsTakenAsShown) {
+  const Result help = ehpt("run --help");
+  ASSERT_EQ(help.exit_code, 0);
+  const std::vector<std::string> sets = set_examples(help.out);
+  // the keys the docs and the issue name (docs/cli.md, docs/scenarios.md)
+  for (const char* key : {"solver.method=", "solver.step_s=", "solver.duration_s=", "output.interval_s=",
+                          "output.signals=", "output.timeseries=false", "vehicle.battery.soc_initial=",
+                          "vehicle.vehicle.mass_kg=", "vehicle.ecu.soc_ref="}) {
+    EXPECT_TRUE(std::any_of(sets.begin(), sets.end(), [&](const std::string& v) { return v.starts_with(key); }))
+        << key << " is not in 'ehpt run --help':\n" << help.out;
+  }
+  EXPECT_HAS(help.out, "docs/scenarios.md");
+  EXPECT_HAS(help.out, "'ehpt signals'");
+  const fs::path root = fresh("run_help_keys");
+  std::vector<std::string> argv{"run", "psecu2_nedc", "--quiet", "--out", (root / "run").string()};
+  for (const std::string& v : sets) {
+    argv.push_back("--set");
+    argv.push_back(v);
+  }
+  const Result r = ehpt_argv(argv);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string summary = slurp((root / "run/summary.json").string());
+  for (const std::string& v : sets) EXPECT_HAS(summary, ehpt::io::json_escape(v));  // the overrides, recorded
+  EXPECT_FALSE(fs::exists(root / "run/timeseries.csv"));                           // output.timeseries=false
+  EXPECT_HAS(summary, "\"implicit-euler\"");
+}
+
+// docs/cli.md quotes each command's help: the quote is the help (the line naming this ehpt's
+// own folder aside, which differs between the build folder and an installed ehpt).
+TEST(CliHelp, TheDocsQuoteEachHelpAsPrinted) {
+  const std::string doc = slurp(ehpt::test::source_path("docs/cli.md"));
+  int compared = 0;
+  for (const char* cmd : {"run", "plant", "ecu", "replay", "list", "signals", "plot", "sweep", "bench"}) {
+    const std::string heading = std::string("### ehpt ") + cmd + "\n\n```\n";
+    const std::size_t at = doc.find(heading);
+    if (at == std::string::npos) continue;
+    const std::size_t begin = at + heading.size();
+    const std::string quoted = doc.substr(begin, doc.find("```\n", begin) - begin);
+    std::string help = ehpt(std::string(cmd) + " --help").out;
+    if (const std::size_t own = help.find("\nThis ehpt: "); own != std::string::npos) {
+      help = help.substr(0, own + 1) + "This ehpt: ...\n";
+    }
+    EXPECT_EQ(quoted, help) << "docs/cli.md, 'ehpt " << cmd << "'";
+    ++compared;
+  }
+  EXPECT_GE(compared, 7);
+}
+
+// 'ehpt list' and 'ehpt plot' say every place they look, then where this ehpt found its folder.
+TEST(CliHelp, ListAndPlotSayWhereThisEhptLooks) {
+  const Result list = ehpt("list --help");
+  ASSERT_EQ(list.exit_code, 0);
+  for (const char* place : {"$EHPT_SCENARIOS", "./scenarios", "<prefix>/share/ehpt/scenarios for an installed ehpt",
+                            "the source tree's scenarios/ for an ehpt run from its build folder"}) {
+    EXPECT_HAS(list.out, place);
+  }
+  // the binary under test runs from the build folder (its working folder has no scenarios/)
+  EXPECT_HAS(list.out, "This ehpt: " + ehpt::test::source_path("scenarios") + "\n");
+  const fs::path own = fresh("list_help_env");
+  EXPECT_HAS(ehpt_argv({"list", "--help"}, {"EHPT_SCENARIOS=" + own.string()}).out, "This ehpt: " + own.string() + "\n");
+  const Result plot = ehpt("plot --help");
+  ASSERT_EQ(plot.exit_code, 0);
+  for (const char* place : {"$EHPT_TOOLS_DIR", "<prefix>/libexec/ehpt for an installed ehpt", "the source tree's tools/"}) {
+    EXPECT_HAS(plot.out, place);
+  }
+  EXPECT_HAS(plot.out, "This ehpt: " + ehpt::test::source_path("tools") + "/plot.py\n");
+  EXPECT_HAS(ehpt_argv({"plot", "--help"}, {"EHPT_TOOLS_DIR=" + own.string()}).out, "This ehpt: " + own.string() + "/plot.py\n");
+}
+
+// "1 start", "2 starts": the count agrees with summary.json's ice_starts and the noun with the count.
+TEST(CliSummary, TheEngineStartsAreCountedInGoodEnglish) {
+  const fs::path root = fresh("starts");
+  for (const auto& [duration, starts] : {std::pair<const char*, int>{"200", 1}, {"400", 2}}) {
+    const fs::path dir = root / duration;
+    const Result r = ehpt_argv({"run", "psecu2_nedc", "--out", dir.string(), "--set", std::string("solver.duration_s=") + duration,
+                                "--set", "output.timeseries=false"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    ASSERT_EQ(json_number(slurp((dir / "summary.json").string()), "ice_starts"), starts) << duration;
+    const std::regex line(R"(engine on [0-9.]+ s, ([0-9]+) (starts?)\n)");
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(r.out, m, line)) << r.out;
+    EXPECT_EQ(std::stoi(m[1].str()), starts);
+    EXPECT_EQ(m[2].str(), starts == 1 ? "start" : "starts") << r.out;
+  }
+}
+
+// --plot draws from timeseries.csv: without one (output.timeseries=false) it is refused before
+// anything runs, exit 2, with what to do, and no folder (temporary or not) is left behind.
+TEST(CliPlot, PlotWithoutATimeseriesIsRefusedBeforeTheRun) {
+  const fs::path root = fresh("plot_no_timeseries");
+  const fs::path out = root / "run";
+  const Result r = ehpt_argv({"run", "ev_sort1", "--plot", "--out", out.string(), "--set", "output.timeseries=false"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_HAS(r.err, "--plot draws its figures from timeseries.csv, but output.timeseries = false");
+  EXPECT_HAS(r.err, "drop --plot, or drop output.timeseries = false");
+  EXPECT_HAS(r.err, "nothing was run");
+  EXPECT_EQ(r.out, "");  // no summary: nothing ran
+  EXPECT_TRUE(fs::is_empty(root)) << "a folder was left in " << root;
+  // the same refusal when the scenario file says it
+  std::ofstream(root / "s.toml") << "vehicle_file = \"" << ehpt::test::source_path("vehicles/mbev.toml")
+                                 << "\"\ncycle = \"" << ehpt::test::source_path("data/cycles/cycle_sort1.csv")
+                                 << "\"\n[output]\ntimeseries = false\n";
+  const Result f = ehpt_argv({"run", (root / "s.toml").string(), "--plot", "--out", out.string()});
+  EXPECT_EQ(f.exit_code, 2) << f.err;
+  EXPECT_HAS(f.err, "--plot draws its figures from timeseries.csv");
+  EXPECT_FALSE(fs::exists(out));
 }
 
 }  // namespace

@@ -1,0 +1,213 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// `ehpt bench` sections (d) and (e): the sub-runs (allocations, trajectory hashes across pacers).
+#include "targets/bench/sections.hpp"
+#include "targets/bench/supervisor.hpp"
+
+namespace ehpt::bench {
+
+namespace {
+
+// ehpt run (the map EV on Sort1) as fast as possible, S seconds, into DIR/name.
+void batch_run(Bench& b, const std::string& name, const std::vector<std::string>& extra) {
+  SubRun& r = b.run(name);
+  std::vector<std::string> argv = {b.exe, "run", kRtScenario, "--out", b.dir + "/" + name, "--quiet"};
+  for (const auto& a : b.duration_set(b.seconds)) argv.push_back(a);
+  for (const auto& a : extra) argv.push_back(a);
+  const Outcome o = run_child(argv, b.logs, name, 120.0 + b.seconds);
+  r.wall_s = o.wall_s;
+  Json j;
+  std::string why;
+  if (o.stopped) {
+    r.status = "stopped";
+    return;
+  }
+  if (!o.ok()) return fail(b, r, o.why);
+  if (!read_summary(b.dir + "/" + name, b.started_at, j, why)) return fail(b, r, why);
+  take_summary(r, j);
+}
+
+// ehpt plant + ehpt ecu over socketcand on 127.0.0.1 (lockstep, or the wall clock).
+void socketcand_run(Bench& b, const std::string& name, bool lockstep, double seconds) {
+  SubRun& r = b.run(name);
+  const auto t0 = Clock::now();
+  for (int attempt = 0; attempt < 3 && !stopping(); ++attempt) {
+    const int port = free_port();
+    if (port <= 0) return fail(b, r, "no free TCP port on 127.0.0.1");
+    const std::string bus = "socketcand:127.0.0.1:" + std::to_string(port);
+    std::vector<std::string> plant = {b.exe, "plant", kRtScenario, "--bus", bus, "--out", b.dir + "/" + name, "--quiet",
+                                      "--ecu-wait-s", "30"};
+    if (lockstep) plant.push_back("--lockstep");
+    std::vector<std::string> ecu = {b.exe, "ecu", kRtScenario, "--bus", bus, "--quiet", "--idle-timeout-s", "10"};
+    for (const auto& a : b.duration_set(seconds)) {
+      plant.push_back(a);
+      ecu.push_back(a);
+    }
+    Child p, e;
+    std::string why;
+    if (!p.start(plant, b.logs + "/" + name + "_plant.out", b.logs + "/" + name + "_plant.err", why)) return fail(b, r, why);
+    // until it listens (or ends: a port taken meanwhile is tried again)
+    int code = 0;
+    bool ended = false;
+    const auto w0 = Clock::now();
+    while (!listening(port) && !stopping() && seconds_since(w0) < 20.0) {
+      if ((ended = p.poll(code))) break;
+      sleep_s(0.02);
+    }
+    if (stopping()) {
+      r.status = "stopped";
+      return;
+    }
+    if (ended || !listening(port)) {
+      const std::string line = last_line(b.logs + "/" + name + "_plant.err");
+      if (ended && line.find("port in use") != std::string::npos) continue;
+      return fail(b, r, "the plant does not listen on " + bus + (line.empty() ? "" : ": " + line));
+    }
+    if (!e.start(ecu, b.logs + "/" + name + "_ecu.out", b.logs + "/" + name + "_ecu.err", why)) return fail(b, r, why);
+    const Outcome po = p.wait(120.0 + 2.0 * seconds);
+    const Outcome eo = e.wait(30.0);
+    r.wall_s = seconds_since(t0);
+    if (po.stopped || eo.stopped) {
+      r.status = "stopped";
+      return;
+    }
+    if (po.code != 0 || po.timed_out) {
+      const std::string line = last_line(b.logs + "/" + name + "_plant.err");
+      return fail(b, r, "ehpt plant: " + (po.why.empty() ? "exit " + std::to_string(po.code) : po.why) +
+                            (line.empty() ? "" : ": " + line));
+    }
+    if (eo.code != 0 || eo.timed_out) {
+      const std::string line = last_line(b.logs + "/" + name + "_ecu.err");
+      return fail(b, r, "ehpt ecu: exit " + std::to_string(eo.code) + (line.empty() ? "" : ": " + line));
+    }
+    Json j;
+    if (!read_summary(b.dir + "/" + name, b.started_at, j, why)) return fail(b, r, why);
+    return take_summary(r, j);
+  }
+  if (!stopping()) fail(b, r, "no free port after 3 attempts");
+}
+
+void lcm_run(Bench& b) {
+  SubRun& r = b.run("lockstep_lcm");
+  const std::string bus = "lcm:udpm://239.255.76.67:7667?ttl=0";
+  std::vector<std::string> plant = {b.exe, "plant", kRtScenario, "--bus", bus, "--lockstep", "--out", b.dir + "/lockstep_lcm",
+                                    "--quiet", "--ecu-wait-s", "30"};
+  std::vector<std::string> ecu = {b.exe, "ecu", kRtScenario, "--bus", bus, "--quiet", "--idle-timeout-s", "2"};
+  for (const auto& a : b.duration_set(b.seconds)) {
+    plant.push_back(a);
+    ecu.push_back(a);
+  }
+  const std::string err = b.logs + "/lockstep_lcm.err";
+  const double timeout_s = 120.0 + 2.0 * b.seconds;
+  // fork, then a new network namespace in the child: only safe while this process has one
+  // thread (it has: nothing here starts one; checked, not assumed)
+  if (read_small_file("/proc/self/status").find("\nThreads:\t1\n") == std::string::npos) {
+    r.status = "not run: the bench process has more than one thread (fork is not safe)";
+    return;
+  }
+  std::fflush(stdout);
+  std::fflush(stderr);
+  const pid_t pid = ::fork();
+  if (pid < 0) return fail(b, r, std::string("fork: ") + std::strerror(errno));
+  if (pid == 0) {
+    ::setpgid(0, 0);
+    const int fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd >= 0) {
+      ::dup2(fd, STDERR_FILENO);
+      ::close(fd);
+    }
+    lcm_in_netns(plant, ecu, b.logs, timeout_s);
+  }
+  ::setpgid(pid, pid);  // also from here, so that killpg works at once
+  Child c;
+  c.adopt(pid, true);
+  const Outcome o = c.wait(timeout_s + 40.0);
+  r.wall_s = o.wall_s;
+  if (o.stopped) {
+    r.status = "stopped";
+    return;
+  }
+  if (o.code == 77) {
+    r.status = "not run: " + last_line(err);
+    return;
+  }
+  if (o.code != 0 || o.timed_out) {
+    const std::string line = last_line(err);
+    return fail(b, r, (o.timed_out ? o.why : "exit " + std::to_string(o.code)) + (line.empty() ? "" : ": " + line));
+  }
+  Json j;
+  std::string why;
+  if (!read_summary(b.dir + "/lockstep_lcm", b.started_at, j, why)) return fail(b, r, why);
+  take_summary(r, j);
+}
+
+void replay_run(Bench& b) {
+  SubRun& r = b.run("replay");
+  // this build has it when `ehpt replay --help` says so
+  Child probe;
+  std::string why;
+  b.replay_available = probe.start({b.exe, "replay", "--help"}, "/dev/null", "/dev/null", why) && probe.wait(10.0).ok();
+  if (!b.replay_available) {
+    r.status = "not available in this build";
+    return;
+  }
+  if (!b.run("wallclock_socketcand").ok()) {
+    r.status = "not run: the wall-clock session failed";
+    return;
+  }
+  const Outcome o = run_child({b.exe, "replay", b.dir + "/wallclock_socketcand", "--out", b.dir + "/replay", "--quiet"},
+                              b.logs, "replay", 300.0);
+  r.wall_s = o.wall_s;
+  if (o.stopped) {
+    r.status = "stopped";
+    return;
+  }
+  // exit 1: the replay ran and its hash differs (the comparison below reports it)
+  Json j;
+  if ((o.code == 0 || o.code == 1) && read_summary(b.dir + "/replay", b.started_at, j, why)) return take_summary(r, j);
+  fail(b, r, o.why.empty() ? why : o.why);
+}
+
+}  // namespace
+
+// Reads DIR/name/summary.json written by this bench (not an earlier one).
+bool read_summary(const std::string& dir, std::time_t since, Json& j, std::string& why) {
+  const std::string path = dir + "/summary.json";
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    why = path + ": " + std::strerror(errno);
+    return false;
+  }
+  if (st.st_mtime + 1 < since) {
+    why = path + ": older than this bench";
+    return false;
+  }
+  if (!read_json(path, j)) {
+    why = path + ": not readable JSON";
+    return false;
+  }
+  return true;
+}
+
+void take_summary(SubRun& r, const Json& j) {
+  r.hash = json_str(j, "trajectory_hash");
+  const double allocations = json_num(j, "heap_allocations_after_startup");
+  r.allocations_reported = std::isfinite(allocations);
+  if (r.allocations_reported) r.allocations = static_cast<long long>(allocations);
+  r.peak_rss_MB = json_num(j, "peak_rss_MB");
+  r.status = "ok";
+}
+
+void section_runs(Bench& b) {
+  b.progress("(d, e) determinism and allocations: " + std::string(kRtScenario) + ", " + std::to_string(b.seconds) +
+             " s as fast as possible (x3), lockstep over socketcand and LCM; a " + fmt("%.0f", b.wall_clock_s) +
+             " s wall-clock session over socketcand and its replay (about " + fmt("%.0f", b.wall_clock_s + 5.0) + " s)");
+  batch_run(b, "batch_1", {});
+  if (!stopping()) batch_run(b, "batch_2", {});
+  if (!stopping()) batch_run(b, "batch_can", {"--set", "vehicle.ecu.codec=can"});
+  if (!stopping()) socketcand_run(b, "lockstep_socketcand", true, b.seconds);
+  if (!stopping()) lcm_run(b);
+  if (!stopping()) socketcand_run(b, "wallclock_socketcand", false, b.wall_clock_s);
+  if (!stopping()) replay_run(b);
+}
+
+}  // namespace ehpt::bench

@@ -1,0 +1,84 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// `ehpt bench` sections (a) and (b): speed in this process.
+#include "targets/bench/sections.hpp"
+#include "targets/bench/supervisor.hpp"
+
+namespace ehpt::bench {
+
+namespace {
+
+SpeedRun measure_speed(const std::string& scenario, const std::string& solver, double duration_s, int reps) {
+  SpeedRun r;
+  r.scenario = scenario;
+  r.solver = solver;
+  std::vector<std::string> sets = {"solver.method=" + solver, "solver.step_s=0.001"};
+  if (duration_s > 0.0) sets.push_back("solver.duration_s=" + ehpt::io::number_text(duration_s));
+  ehpt::hil::Scenario sc;
+  r.error = load(scenario, sets, sc);
+  if (!r.error.empty()) return r;
+  r.steps = sc.solver.steps;
+  r.duration_s = static_cast<double>(sc.solver.steps) * sc.solver.step_s;
+  std::vector<double> ns, walls;
+  for (int k = 0; k < reps; ++k) {
+    double wall = 0.0;
+    if (!timed_run(sc, wall, nullptr, r.error)) return r;
+    walls.push_back(wall);
+    ns.push_back(1e9 * wall / static_cast<double>(r.steps));
+  }
+  r.ns_per_step = spread(ns);
+  r.wall_s = spread(walls);
+  r.realtime_factor = r.duration_s / r.wall_s.median;
+  return r;
+}
+}  // namespace
+
+// One whole run through the facade; wall time of the stepping alone (start-up excluded).
+// False (why) on a fault or a stop.
+bool timed_run(const ehpt::hil::Scenario& sc, double& wall_s, ehpt::hil::RunFigures* figures, std::string& why) {
+  ehpt::hil::SimulationOptions so;
+  const std::unique_ptr<ehpt::hil::Simulation> sim = ehpt::hil::make_simulation(sc, so);
+  const auto t0 = Clock::now();
+  while (!sim->finished() && !stopping()) {
+    sim->run(&g_stop);
+    sim->clear_rows();
+  }
+  wall_s = seconds_since(t0);
+  if (stopping()) {
+    why = "stopped";
+    return false;
+  }
+  if (sim->stats().fault != 0) {
+    why = "fault at t = " + ehpt::io::number_text(sim->stats().fault_time_s) + " s";
+    return false;
+  }
+  if (figures != nullptr) *figures = sim->figures();
+  return true;
+}
+
+// (a), (b)
+void section_speed(Bench& b) {
+  const std::vector<std::string> vehicles = {"ev_nedc", "evpm_nedc", "evam_nedc", "psecu2_nedc"};
+  b.progress("(a, b) speed: 4 vehicles x 2 solvers at 1 ms, " + std::to_string(b.reps) +
+             " whole cycle(s) each (about " + std::to_string(b.reps * 6 + 1) + " s)");
+  // warm-up, not measured: the first run of a process pays for cold caches and page faults
+  {
+    ehpt::hil::Scenario sc;
+    double wall = 0.0;
+    std::string why;
+    if (load("ev_nedc", {"solver.duration_s=100"}, sc).empty()) timed_run(sc, wall, nullptr, why);
+  }
+  for (const auto& v : vehicles) {
+    for (const char* solver : {"rk4", "implicit-euler"}) {
+      if (stopping()) return;
+      SpeedRun r = measure_speed(v, solver, 0.0, b.reps);
+      if (std::string(solver) == "rk4" && v == "psecu2_nedc") r.target_ns = 150.0;
+      if (std::string(solver) == "rk4" && v == "ev_nedc") r.target_ns = 100.0;
+      if (r.error == "stopped") return;
+      if (!r.error.empty()) b.any_failed = true;
+      b.speed.push_back(r);
+    }
+  }
+  b.speed_status = "ok";
+}
+
+}  // namespace ehpt::bench
