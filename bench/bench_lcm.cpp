@@ -49,8 +49,9 @@ void BM_LcmMemqLockstep_ev(benchmark::State& state) {
     hil::BusPlantOptions bo;
     bo.lockstep = true;
     auto driver = hil::make_bus_plant(sc, *bus, bo, error);
+    driver->start(*sim, nullptr);
     while (!sim->finished()) {
-      driver->advance(*sim, 50000, nullptr);
+      sim->run();
       sim->clear_rows();
     }
     periods += sim->total_steps() / sc.solver.ecu_ratio + 1;

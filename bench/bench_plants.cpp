@@ -75,8 +75,9 @@ void BM_BevRun(benchmark::State& state) {
   std::int64_t steps = 0;
   for (auto _ : state) {
     ecu::EvFollower follower;
-    hil::Runner<plant::BevPlant, Integrator, ecu::EvFollower> runner(plant, 1e-3, sc.solver.steps, 100, {0, 1, 2},
-                                                                    sc.solver.steps, &follower);
+    hil::Runner<plant::BevPlant, Integrator, ecu::EvFollower> runner(
+        plant, {.total_steps = sc.solver.steps, .decimation = 100, .columns = {0, 1, 2}, .chunk_steps = sc.solver.steps},
+        &follower);
     runner.run();
     steps += runner.step_index();
     benchmark::DoNotOptimize(runner.state());
@@ -139,7 +140,8 @@ void BM_Psecu2Run_nedc(benchmark::State& state, const char* scenario) {
     const auto& ecu_params = sc.ecu.get<ecu::PsdEcuParams>();
   ecu::PsdEcu ecu(ecu_params, 1e-3);
     hil::Runner<plant::PsdPlant, solvers::Rk4<plant::PsdPlant>, ecu::PsdEcu> runner(
-        plant, 1e-3, sc.solver.steps, 100, {0, 1, 2}, sc.solver.steps, &ecu, 1);
+        plant, {.total_steps = sc.solver.steps, .decimation = 100, .columns = {0, 1, 2}, .chunk_steps = sc.solver.steps},
+        &ecu);
     runner.run();
     steps += runner.step_index();
     benchmark::DoNotOptimize(runner.state());
@@ -183,8 +185,9 @@ void BM_EvRun(benchmark::State& state, const char* scenario) {
   std::int64_t steps = 0;
   for (auto _ : state) {
     ecu::EvFollower follower;
-    hil::Runner<Plant, Integrator, ecu::EvFollower> runner(plant, 1e-3, sc.solver.steps, 100, {0, 1, 2},
-                                                           sc.solver.steps, &follower);
+    hil::Runner<Plant, Integrator, ecu::EvFollower> runner(
+        plant, {.total_steps = sc.solver.steps, .decimation = 100, .columns = {0, 1, 2}, .chunk_steps = sc.solver.steps},
+        &follower);
     runner.run();
     steps += runner.step_index();
     benchmark::DoNotOptimize(runner.state());

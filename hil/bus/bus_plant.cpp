@@ -12,8 +12,9 @@
 #include "hil/bus/bus_family.hpp"
 #include "hil/bus/bus_wire_can.hpp"
 #include "hil/bus/bus_wire_lcm.hpp"
-#include "hil/run/histogram.hpp"
+#include "hil/run/latency_histogram.hpp"
 #include "hil/run/pacer.hpp"
+#include "hil/run/port.hpp"
 #include "hil/bus/session_log.hpp"
 #include "hil/run/simulation.hpp"
 #include "io/handoff_buffer.hpp"
@@ -23,11 +24,14 @@ namespace ehpt::hil {
 
 namespace {
 
-// The plant's side of a bus, over a Wire (hil/bus/bus_wire_can.hpp, hil/bus/bus_wire_lcm.hpp): the
-// pacing (lockstep, wall clock), the samples, the staleness timeout and safe state, the
-// figures. The wire moves samples out and commands in.
+// The plant's side of a bus, over a Wire (hil/bus/bus_wire_can.hpp, hil/bus/bus_wire_lcm.hpp): an
+// ECU port of the runner's step loop (hil/run/port.hpp) and, on the wall clock, its pacer;
+// the samples, the staleness timeout and safe state, the figures. The wire moves samples out
+// and commands in. Lockstep is the port's sample waiting (bounded) for that sample's command.
 template <class Sensors, class Wire>
-class BusPlant final : public ExternalDriver {
+class BusPlant final : public ExternalDriver,
+                       public EcuPort<Sensors, typename BusFamily<Sensors>::Command>,
+                       public StepPacer {
   using F = BusFamily<Sensors>;
   using Command = typename F::Command;
 
@@ -52,36 +56,6 @@ class BusPlant final : public ExternalDriver {
     return true;
   }
 
-  void advance(Simulation& sim, std::int64_t max_steps, const std::atomic<int>* stop) override {
-    if (!started_) {
-      start(sim, stop);
-      if (!opt_.lockstep) pacer_.wait_for_step(0);
-    }
-    const std::int64_t end = std::min(sim.total_steps(), sim.step_index() + max_steps);
-    while (!sim.finished() && sim.step_index() <= end) {
-      if (stop != nullptr && stop->load(std::memory_order_relaxed) != 0) return;
-      const std::int64_t n = sim.step_index();
-      if (opt_.lockstep) {
-        if (n % ratio_ == 0 && n != last_sample_) {
-          send_sample(sim, n);
-          wait_for_command(sim, n, stop);
-        }
-        check_staleness(sim, n);
-        std::int64_t k = std::min({ratio_ - n % ratio_, sim.total_steps() - n, std::max<std::int64_t>(end - n, 0)});
-        // a command that times out within this period does so at its step, not the next sample
-        if (!safe_ && timeout_step() > n) k = std::min(k, timeout_step() - n);
-        sim.step(k);
-        if (k == 0 && !sim.finished()) return;  // the chunk is full: the rows go out first
-      } else {
-        exchange(sim);
-        if (n >= end && n < sim.total_steps()) return;
-        sim.step(n < sim.total_steps() ? 1 : 0);
-        pacer_.wait_for_step(sim.step_index());
-        period_error_.record(clock_.now_ns() - pacer_.last_deadline_ns());
-      }
-    }
-  }
-
   bool realtime_capable(std::string& why) const override {
     if (opt_.lockstep) {
       why = "--lockstep waits for the ECU's command at every sample: it cannot keep a real-time period (use one or the other)";
@@ -90,21 +64,47 @@ class BusPlant final : public ExternalDriver {
     return true;
   }
 
-  // Before t = 0 (both pacers): the ECU connects and answers sample 0.
+  // Before t = 0: the ECU connects and answers sample 0; then the plant is the simulation's
+  // port, and on the wall clock its pacer (the real-time loop paces it itself).
   void start(Simulation& sim, const std::atomic<int>* stop) override {
     if (started_) return;
     started_ = true;
-    wait_for_peer(stop);
-    first_command(sim, stop);
+    stop_ = stop;
+    wait_for_peer();
+    first_command(sim);
+    if (!sim.attach(this, opt_.lockstep || opt_.realtime ? nullptr : this)) {
+      attach_error_ = "the bus plant's messages are not this vehicle's";
+    }
   }
 
-  // The wall-clock and real-time pacers' IO before each step: what came in, the sample at
-  // an ECU step, the staleness check. Never waits.
-  void exchange(Simulation& sim) override {
-    const std::int64_t n = sim.step_index();
-    drain(sim, n);
-    if (n % ratio_ == 0 && n != last_sample_) send_sample(sim, n);
-    check_staleness(sim, n);
+  // (a) Wall clock and real time: what came in; each complete, fresh command acts from n.
+  bool commands_due(std::int64_t n, Command& command) override {
+    if (opt_.lockstep) return false;  // a command answers its sample: taken in sample()
+    const IoTime io(*this);
+    return drain(n, command);
+  }
+  // (b) The sensors at t_n (sample 0 went out at start-up); lockstep waits for its command.
+  bool sample(std::int64_t n, const Sensors& s, Command& command) override {
+    if (n == last_sample_) return false;
+    const IoTime io(*this);
+    send_sample(s, n);
+    return opt_.lockstep && wait_for_command(n, command);
+  }
+  // (c) The staleness check (lockstep: at its samples and where the held command times out).
+  bool before_step(std::int64_t n, Command& command) override {
+    if (opt_.lockstep && n % ratio_ != 0 && (safe_ || n < timeout_step())) return false;
+    return check_staleness(n, command);
+  }
+  // The wall clock: step n starts at its deadline; how late each one woke is counted.
+  void wait_for_step(std::int64_t n) override {
+    pacer_.wait_for_step(n);
+    if (n > 0) period_error_.record(clock_.now_ns() - pacer_.last_deadline_ns());
+  }
+
+  std::int64_t take_io_ns() override {
+    const std::int64_t t = io_ns_;
+    io_ns_ = 0;
+    return t;
   }
 
   bool flush(std::string& error) override {
@@ -115,7 +115,8 @@ class BusPlant final : public ExternalDriver {
                       " bytes dropped (the writer fell behind): the session cannot be replayed";
     }
     if (log_ok && !inputs_error_.empty()) error = inputs_error_;
-    return log_ok && inputs_error_.empty();
+    if (!attach_error_.empty()) error = attach_error_;
+    return log_ok && inputs_error_.empty() && attach_error_.empty();
   }
 
   // The real-time loop's writer thread: what the loop handed over, written off the loop.
@@ -143,10 +144,10 @@ class BusPlant final : public ExternalDriver {
     b.number("longest_command_gap_s", static_cast<double>(longest_gap_steps_) * h_s_);
     b.integer("saturated_signals", saturated_);
     io::JsonObject timing;
-    const MicrosecondHistogram& hist = opt_.lockstep ? round_trip_ : period_error_;
-    timing.number("p50", hist.quantile_us(0.5));
-    timing.number("p99", hist.quantile_us(0.99));
-    timing.number("max", hist.max_us());
+    const LatencyHistogram& hist = opt_.lockstep ? round_trip_ : period_error_;
+    timing.number("p50", us(hist.quantile_ns(0.5)));
+    timing.number("p99", us(hist.quantile_ns(0.99)));
+    timing.number("max", us(hist.max_ns()));
     timing.integer("count", hist.count());
     if (opt_.lockstep) {
       b.integer("lockstep_waits_timed_out", waits_timed_out_);
@@ -170,59 +171,75 @@ class BusPlant final : public ExternalDriver {
     text += buf;
     if (opt_.realtime) return;
     std::snprintf(buf, sizeof buf, "bus timing    %s p50 %.0f us, p99 %.0f us, max %.0f us\n",
-                  opt_.lockstep ? "round trip" : "period error", hist.quantile_us(0.5), hist.quantile_us(0.99),
-                  hist.max_us());
+                  opt_.lockstep ? "round trip" : "period error", us(hist.quantile_ns(0.5)),
+                  us(hist.quantile_ns(0.99)), us(hist.max_ns()));
     text += buf;
   }
 
  private:
+  static double us(std::int64_t ns) { return static_cast<double>(ns) / 1000.0; }
   const char* pacing() const { return opt_.lockstep ? "lockstep" : opt_.realtime ? "realtime" : "wall_clock"; }
 
   // steps spent in the safe state (up to the last one seen, if still in it)
   std::int64_t safe_steps() const { return safe_steps_ + (safe_ ? last_step_ - safe_since_step_ : 0); }
 
-  void wait_for_peer(const std::atomic<int>* stop) {
+  // The real-time loop's IO figure: the port's own time in its hooks (a clock read only there).
+  struct IoTime {
+    BusPlant& p;
+    std::int64_t t0;
+    explicit IoTime(BusPlant& plant) : p(plant), t0(plant.opt_.realtime ? plant.rt_clock_.now_ns() : 0) {}
+    ~IoTime() {
+      if (p.opt_.realtime) p.io_ns_ += p.rt_clock_.now_ns() - t0;
+    }
+  };
+
+  void wait_for_peer() {
     const std::int64_t deadline = clock_.now_ns() + static_cast<std::int64_t>(opt_.peer_wait_s * 1e9);
     while (!wire_.has_peer() && clock_.now_ns() < deadline) {
-      if (stop != nullptr && stop->load() != 0) return;
+      if (stopped()) return;
       wire_.wait(10'000'000);
       wire_.idle();
     }
   }
+  bool stopped() const { return stop_ != nullptr && stop_->load(std::memory_order_relaxed) != 0; }
 
   // t = 0 waits for the ECU's first command (both pacers): sample 0 is sent again every
   // lockstep_wait_s until it answers, up to peer_wait_s (an ECU on SocketCAN or LCM may start
   // after the plant: there is no connection to wait for). A silence after that is a timeout.
-  void first_command(Simulation& sim, const std::atomic<int>* stop) {
+  void first_command(Simulation& sim) {
     const std::int64_t deadline = clock_.now_ns() + static_cast<std::int64_t>(opt_.peer_wait_s * 1e9);
+    Command command{};
     for (;;) {
-      send_sample(sim, 0);
-      if (wait_for_command(sim, 0, stop, false)) return;
-      if (clock_.now_ns() > deadline || (stop != nullptr && stop->load() != 0)) return;
+      Sensors s;
+      sim.read_sensors(s);
+      send_sample(s, 0);
+      if (wait_for_command(0, command, false)) {
+        sim.write_command(command);
+        return;
+      }
+      if (clock_.now_ns() > deadline || stopped()) return;
     }
   }
 
   // The sensors at t_n, with the plant's status.
-  void send_sample(Simulation& sim, std::int64_t n) {
+  void send_sample(const Sensors& s, std::int64_t n) {
     if (last_sample_ >= 0 && last_sample_ != n && !command_since_sample_) ++stale_samples_;
     command_since_sample_ = false;
     last_sample_ = n;
-    Sensors s;
-    sim.read_sensors(s);
     saturated_ += wire_.send_sample(s, n, safe_);
     sent_ns_ = clock_.now_ns();
   }
 
   // Until the command of the sample is complete (true), or the wait runs out.
-  bool wait_for_command(Simulation& sim, std::int64_t n, const std::atomic<int>* stop, bool count = true) {
+  bool wait_for_command(std::int64_t n, Command& command, bool count = true) {
     const std::int64_t deadline = sent_ns_ + static_cast<std::int64_t>(opt_.lockstep_wait_s * 1e9);
     for (;;) {
-      if (drain(sim, n)) {
+      if (drain(n, command)) {
         round_trip_.record(clock_.now_ns() - sent_ns_);
         return true;
       }
       const std::int64_t left = deadline - clock_.now_ns();
-      if (left <= 0 || (stop != nullptr && stop->load() != 0)) {
+      if (left <= 0 || stopped()) {
         waits_timed_out_ += count ? 1 : 0;
         return false;
       }
@@ -232,19 +249,19 @@ class BusPlant final : public ExternalDriver {
 
   // Everything received; each complete, fresh command goes to the plant. True if one did.
   // Lockstep: the command of this sample only; wall clock: one no older than the timeout.
-  bool drain(Simulation& sim, std::int64_t n) {
+  bool drain(std::int64_t n, Command& command) {
     bool applied = false;
     wire_.receive(std::max<std::int64_t>(last_sample_, 0), opt_.lockstep ? 0 : timeout_steps_,
                   [&](const Command& c) {
-                    apply_command(sim, n, c);
+                    apply_command(n, c, command);
                     applied = true;
                   });
     return applied;
   }
 
   // Every command the plant applies goes through here: to the plant and into inputs.log.
-  void write_command(Simulation& sim, std::int64_t n, const Command& c) {
-    sim.write_command(c);
+  void write_command(std::int64_t n, const Command& c, Command& command) {
+    command = c;
     char line[320];
     const int k = format_command(line, sizeof line - 1, n, c);
     if (k > 0 && static_cast<std::size_t>(k) < sizeof line - 1) {
@@ -260,9 +277,9 @@ class BusPlant final : public ExternalDriver {
     if (inputs_error_.empty() && !text.empty()) inputs_.write(text, inputs_error_);
   }
 
-  void apply_command(Simulation& sim, std::int64_t n, const Command& c) {
+  void apply_command(std::int64_t n, const Command& c, Command& command) {
     applied_ = c;
-    write_command(sim, n, applied_);
+    write_command(n, applied_, command);
     ++commands_applied_;
     command_since_sample_ = true;
     longest_gap_steps_ = std::max(longest_gap_steps_, n - last_command_step_);
@@ -274,20 +291,22 @@ class BusPlant final : public ExternalDriver {
   // The first step at which the held command is older than the timeout.
   std::int64_t timeout_step() const { return last_command_step_ + timeout_steps_ + 1; }
 
-  void check_staleness(Simulation& sim, std::int64_t n) {
+  // True if the held command timed out here (the safe one written).
+  bool check_staleness(std::int64_t n, Command& command) {
     last_step_ = n;
     if (safe_) {
       longest_gap_steps_ = std::max(longest_gap_steps_, n - last_command_step_);
-      return;
+      return false;
     }
-    if (n < timeout_step()) return;
+    if (n < timeout_step()) return false;
     safe_ = true;
     safe_since_step_ = n;
     ++timeouts_;
     Command safe = applied_;
     F::make_safe(safe);
-    write_command(sim, n, safe);
+    write_command(n, safe, command);
     wire_.resync();  // a restarted ECU starts its counters anew
+    return true;
   }
 
   io::TextFileWriter inputs_;
@@ -304,9 +323,13 @@ class BusPlant final : public ExternalDriver {
   std::int64_t last_sample_ = -1, last_command_step_ = 0, sent_ns_ = 0;
   std::int64_t commands_applied_ = 0, stale_samples_ = 0, timeouts_ = 0, safe_steps_ = 0, longest_gap_steps_ = 0;
   std::int64_t saturated_ = 0, waits_timed_out_ = 0, safe_since_step_ = 0, last_step_ = 0;
+  const std::atomic<int>* stop_ = nullptr;  // ends a wait (start-up, lockstep) when non-zero
+  std::string attach_error_;
+  std::int64_t io_ns_ = 0;  // real time: the hooks' time since take_io_ns
+  MonotonicClock rt_clock_;
   SteadyClock clock_;
   WallClock<SteadyClock> pacer_;
-  MicrosecondHistogram round_trip_, period_error_;
+  LatencyHistogram round_trip_, period_error_;  // ns, 1.6 % resolution
 };
 
 }  // namespace

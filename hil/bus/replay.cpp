@@ -4,38 +4,43 @@
 #include <algorithm>
 #include <vector>
 
+#include "hil/run/port.hpp"
 #include "hil/run/simulation.hpp"
 
 namespace ehpt::hil {
 
 namespace {
 
-template <class Command>
-class ReplayDriver final : public ExternalDriver {
+// A recorded session as the runner's ECU port: each record acts from the step it acted from
+// in the session, in the same place of the same loop (hil/run/port.hpp) as the bus plant
+// applied it; as fast as possible (no pacer). No sample goes anywhere.
+template <class Sensors, class Command>
+class ReplayDriver final : public ExternalDriver, public EcuPort<Sensors, Command> {
  public:
   ReplayDriver(const std::vector<RecordedCommand<Command>>& records, const InputsLog& log, std::string log_path)
       : records_(records), log_(log), log_path_(std::move(log_path)) {}
 
   bool open(const io::OutputDir&, std::string&) override { return true; }
 
-  // The bus plant's order at every step: the commands of this step, then the step (one at a
-  // time, as the wall-clock and real-time pacers take them; the runner makes k single steps
-  // and one k-step call the same).
-  void advance(Simulation& sim, std::int64_t max_steps, const std::atomic<int>* stop) override {
-    const std::int64_t end = std::min(sim.total_steps(), sim.step_index() + max_steps);
-    while (!sim.finished() && sim.step_index() <= end) {
-      if (stop != nullptr && stop->load(std::memory_order_relaxed) != 0) return;
-      const std::int64_t n = sim.step_index();
-      while (next_ < records_.size() && records_[next_].step <= n) {
-        sim.write_command(records_[next_].command);
-        ++next_;
-      }
-      if (n >= end && n < sim.total_steps()) return;
-      sim.step(n < sim.total_steps() ? 1 : 0);
-    }
+  void start(Simulation& sim, const std::atomic<int>*) override {
+    if (!sim.attach(this, nullptr)) attach_error_ = log_path_ + ": its family (" + log_.family + ") is not this vehicle's";
   }
 
-  bool flush(std::string&) override { return true; }
+  bool commands_due(std::int64_t n, Command& command) override {
+    bool applied = false;
+    while (next_ < records_.size() && records_[next_].step <= n) {
+      command = records_[next_].command;
+      ++next_;
+      applied = true;
+    }
+    return applied;
+  }
+  bool sample(std::int64_t, const Sensors&, Command&) override { return false; }
+
+  bool flush(std::string& error) override {
+    if (!attach_error_.empty()) error = attach_error_;
+    return attach_error_.empty();
+  }
 
   CommandSource command_source() const override {
     InputFile f = log_.file;
@@ -59,13 +64,16 @@ class ReplayDriver final : public ExternalDriver {
   const InputsLog& log_;
   std::string log_path_;
   std::size_t next_ = 0;
+  std::string attach_error_;
 };
 
 }  // namespace
 
 std::unique_ptr<ExternalDriver> make_replay_driver(const InputsLog& log, const std::string& log_path) {
-  if (log.family == "psd") return std::make_unique<ReplayDriver<msgs::PsdCommand>>(log.psd, log, log_path);
-  return std::make_unique<ReplayDriver<msgs::EvCommand>>(log.ev, log, log_path);
+  if (log.family == "psd") {
+    return std::make_unique<ReplayDriver<msgs::PsdSensors, msgs::PsdCommand>>(log.psd, log, log_path);
+  }
+  return std::make_unique<ReplayDriver<msgs::EvSensors, msgs::EvCommand>>(log.ev, log, log_path);
 }
 
 }  // namespace ehpt::hil

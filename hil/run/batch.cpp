@@ -172,13 +172,11 @@ Streamed stream(Simulation& sim, const Scenario& sc, Sink& sink, const BatchOpti
     sim.clear_rows();
   };
   start_counting_allocations();
-  for (;;) {
+  for (bool first = true;; first = false) {
     const auto t0 = std::chrono::steady_clock::now();
-    if (opt.driver != nullptr) {
-      opt.driver->advance(sim, kChunkSteps, opt.stop_signal);
-    } else {
-      sim.run(opt.stop_signal);
-    }
+    // (the wait for the ECU's first command counts as run time, as it always did)
+    if (first && opt.driver != nullptr) opt.driver->start(sim, opt.stop_signal);
+    sim.run(opt.stop_signal);  // with a driver, its port and pacer inside the runner's loop
     out.run_wall_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     write_rows();
     if (out.csv_error.empty() && opt.driver != nullptr) opt.driver->flush(out.csv_error);
@@ -191,11 +189,7 @@ Streamed stream(Simulation& sim, const Scenario& sc, Sink& sink, const BatchOpti
     }
     if (sim.finished() || !out.csv_error.empty()) break;  // a write error ends the run: its rows are lost
     if (opt.stop_signal != nullptr && opt.stop_signal->load() != 0) {
-      out.interrupted_by = opt.stop_signal->load();
-      if (opt.driver != nullptr) {  // the driver stopped between steps: the state it reached ends the record
-        sim.run(opt.stop_signal);
-        write_rows();
-      }
+      out.interrupted_by = opt.stop_signal->load();  // run() recorded the state it reached
       break;
     }
   }
@@ -337,19 +331,13 @@ Streamed stream_realtime(Simulation& sim, const Scenario& sc, std::string header
   start_counting_allocations();
   pacer.start();
   for (;;) {
-    std::int64_t io_ns = 0, compute_ns = 0;
-    for (std::int64_t k = 0; k < rt.steps_per_tick && !sim.finished(); ++k) {
-      std::int64_t t = clock.now_ns();
-      if (opt.driver != nullptr) {
-        opt.driver->exchange(sim);
-        const std::int64_t t1 = clock.now_ns();
-        io_ns += t1 - t;
-        t = t1;
-      }
-      sim.step(1);
-      compute_ns += clock.now_ns() - t;
-    }
+    // the tick's steps: the runner's loop, with the driver's port inside (its hooks' time is
+    // the tick's IO, the rest compute)
+    const std::int64_t t0 = clock.now_ns();
+    sim.step(rt.steps_per_tick);
+    std::int64_t io_ns = opt.driver != nullptr ? opt.driver->take_io_ns() : 0;
     const std::int64_t t = clock.now_ns();
+    const std::int64_t compute_ns = t - t0 - io_ns;
     queue.push(sim.rows());
     sim.clear_rows();
     step.store(sim.step_index(), std::memory_order_relaxed);

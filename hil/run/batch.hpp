@@ -19,28 +19,28 @@ namespace ehpt::hil {
 
 class Simulation;
 
-// A run whose ECU is outside (a bus target): the simulation is built without its built-in ECU
-// and holds on through faults (an HIL plant reports them on the bus); the driver steps it and
-// talks to the ECU. Between its calls the batch writes the recorded rows.
+// A run whose ECU is outside (a bus target, a replayed session): the simulation is built
+// without its built-in ECU and holds on through faults (an HIL plant reports them on the bus).
+// The driver is a port of the runner's step loop (hil/run/port.hpp), plugged in by start();
+// between chunks the batch writes the recorded rows and asks the driver to flush its files.
 class ExternalDriver {
  public:
   virtual ~ExternalDriver() = default;
   // Start-up: the output folder is open; false and error if the driver's files cannot be made.
   virtual bool open(const io::OutputDir& dir, std::string& error) = 0;
-  // Run phase: advances at most max_steps steps (the row buffer's size); may wait for the ECU
-  // or the wall clock; returns when done, stopped (stop != 0) or max_steps are taken.
-  virtual void advance(Simulation& sim, std::int64_t max_steps, const std::atomic<int>* stop) = 0;
-  // The real-time loop (BatchOptions::realtime) paces the steps itself and asks the driver
-  // only for its IO: start() once before t = 0 (may wait for the ECU: not timed), then
-  // exchange() before every step (receive, send the sample at ECU steps, staleness; never
-  // waits). False from realtime_capable: why it cannot run so (lockstep waits for the ECU).
+  // Start-up, before t = 0 (may wait for the ECU; not timed): plugs its port (and its pacer,
+  // if it paces: the wall clock) into the simulation (Simulation::attach). stop: non-zero
+  // ends its waits, then and in the run.
+  virtual void start(Simulation& sim, const std::atomic<int>* stop) = 0;
+  // The real-time loop (BatchOptions::realtime) paces the steps itself: false and why if
+  // this driver cannot run so (lockstep waits for the ECU).
   virtual bool realtime_capable(std::string& why) const {
     why = "this driver has no real-time mode";
     return false;
   }
-  virtual void start(Simulation&, const std::atomic<int>*) {}
-  virtual void exchange(Simulation&) {}
-  // Called by the real-time loop's writer thread, concurrently with exchange(): the driver
+  // The real-time loop's IO figure: the time its port spent in the loop since the last call.
+  virtual std::int64_t take_io_ns() { return 0; }
+  // Called by the real-time loop's writer thread, concurrently with the loop: the driver
   // writes its files (bus.log) from buffers the loop handed over, so no file write blocks a tick.
   virtual void background_flush() {}
   // Between chunks and at the end: the driver's own files (bus.log); false and error on failure.

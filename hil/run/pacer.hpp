@@ -3,11 +3,12 @@
 // Pacers: when the runner may take the next step. Every pacer gives the same trajectory; they
 // differ only in waiting. The timing logic is a pure function (tick_after) so that it is
 // tested against a fake clock (ros2_control's style); the waiting is the pacer's.
-//   AsFastAsPossible: never waits (batch runs).
-//   WallClock<Clock>: step n is due at start + n period; waits until then. Overrun policy:
-//   when a step ends after later ticks have passed, those ticks are skipped and counted,
-//   never caught up in a burst. (A lockstep pacer, waiting for the ECU's command, and the
-//   real-time SCHED_FIFO pacer plug in the same way.)
+//   none (the runner without a StepPacer, hil/run/port.hpp): never waits (batch runs);
+//   WallClock<Clock>: step n is due at start + n period; waits until then (the bus plant's
+//   StepPacer). Overrun policy: when a step ends after later ticks have passed, those ticks
+//   are skipped and counted, never caught up in a burst;
+//   TickPacer<Clock>: the real-time loop's ticks on absolute deadlines (SCHED_FIFO);
+//   lockstep is no pacer: the bus port's sample waits for that sample's command.
 
 #include <time.h>
 
@@ -20,11 +21,6 @@
 #include "hil/run/latency_histogram.hpp"
 
 namespace ehpt::hil {
-
-struct AsFastAsPossible {
-  // Run phase: step n may start now.
-  void wait_for_step(std::int64_t) {}
-};
 
 // When the tick that follows `now` is, and how many ticks were missed on the way.
 struct NextTick {

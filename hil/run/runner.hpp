@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
-// The runner core (STYLE.md §8): per step the controller port (sensors -> ECU -> command,
-// with its period and latency), advance() on the fixed grid t0 + n h, the outputs, and small
-// policies composed around it: Recorder (rows), Metrics (declared by the vehicle),
-// FaultPolicy (stop or hold) and a Pacer (as fast as possible; wall clock, lockstep and real
-// time plug in). A plant with an observation (solvers/plant.hpp) gives, at the grid points
+// The runner core (STYLE.md §8), ehpt's one step loop: per step the commands due and the ECU
+// sample (the built-in ECU with its period and latency, or an ECU port from outside: a bus,
+// a replayed session; hil/run/port.hpp), advance() on the fixed grid t0 + n h, the outputs,
+// the pacer (none: as fast as possible; wall clock; lockstep is a port that waits for its
+// command), and small policies composed around it: Recorder (rows), Metrics (declared by
+// the vehicle), FaultPolicy (stop or hold). A plant with an observation (solvers/plant.hpp) gives, at the grid points
 // that are not recorded, only what the metrics and the fault policy read, with dx/dt and the
 // crossing functions for the next step; the full outputs are computed where they are recorded
 // or can be read (see observe()). Start-up sizes every buffer; run() allocates nothing, does no I/O and takes
@@ -22,7 +23,7 @@
 #include <vector>
 
 #include "hil/run/metrics.hpp"
-#include "hil/run/pacer.hpp"
+#include "hil/run/port.hpp"
 #include "hil/run/recorder.hpp"
 #include "msgs/stamp.hpp"
 #include "plant/signals.hpp"
@@ -54,6 +55,20 @@ enum class FaultPolicy { kStop, kHold };
 // any test whose run raised a fault it did not expect. Touched once per faulted run.
 inline std::atomic<std::int64_t> g_runs_with_fault{0};
 
+// What a run is: its grid, its record, its ECU's timing and its fault policy (start-up only).
+struct RunnerOptions {
+  double step_s = 1e-3;               // the fixed grid t0 + n step_s
+  std::int64_t total_steps = 0;       // the run ends at step total_steps
+  std::int64_t decimation = 1;        // a row every decimation steps from step 0 (and the last)
+  std::vector<int> columns;           // indices into plant.signals() to record
+  std::int64_t chunk_steps = 50000;   // most steps one run() call may take; sizes the row buffer
+  std::int64_t ecu_ratio = 1;         // an ECU sample every ecu_ratio steps from step 0
+  std::int64_t ecu_latency_steps = 0; // a command acts this many steps after its sample
+  FaultPolicy fault_policy = FaultPolicy::kStop;
+  // true: no built-in ECU; run() stops at each ECU sample for the caller (sense, set_command)
+  bool external_ecu = false;
+};
+
 // A runner without a controller: the plant's inputs stay as constructed.
 struct NoController {};
 
@@ -76,7 +91,7 @@ struct SensorsOf<Plant> {
 // discrete-time system. latency_steps = 0 (the default): the command acts from the sample
 // it was computed from, as the library's continuous ECUs do and as a lockstep SIL (the plant
 // waits for the command) can honour exactly.
-template <class Plant, class Integrator, class Controller = NoController, class Pacer = AsFastAsPossible>
+template <class Plant, class Integrator, class Controller = NoController>
   requires solvers::RunnablePlant<Plant> && (std::is_same_v<Controller, NoController> || solvers::PlantWithSensors<Plant>)
 class Runner {
  public:
@@ -84,27 +99,25 @@ class Runner {
   using Modes = typename Plant::Modes;
   using Inputs = typename Plant::Inputs;
   using Outputs = typename Plant::Outputs;
+  using Sensors = typename SensorsOf<Plant>::type;
+  using Port = EcuPort<Sensors, Inputs>;
 
-  // columns: indices into plant.signals() to record. chunk_steps: most steps one run() call
-  // may take; the row buffer is sized for it here.
-  Runner(const Plant& plant, double h_s, std::int64_t total_steps, std::int64_t decimation,
-         const std::vector<int>& columns, std::int64_t chunk_steps, Controller* controller = nullptr,
-         std::int64_t controller_ratio = 1, std::int64_t latency_steps = 0, Pacer* pacer = nullptr,
-         FaultPolicy fault_policy = FaultPolicy::kStop, bool external_ecu = false)
+  // pacer: when each step may start (none: at once)
+  Runner(const Plant& plant, const RunnerOptions& opt, Controller* controller = nullptr, StepPacer* pacer = nullptr)
       : plant_(plant),
-        external_ecu_(external_ecu),
+        external_ecu_(opt.external_ecu),
         controller_(controller),
         pacer_(pacer),
-        fault_policy_(fault_policy),
-        controller_ratio_(controller_ratio),
-        latency_steps_(latency_steps),
+        fault_policy_(opt.fault_policy),
+        controller_ratio_(opt.ecu_ratio),
+        latency_steps_(opt.ecu_latency_steps),
         integrator_(plant),
-        stepper_(plant, integrator_, 0.0, h_s),
-        total_steps_(total_steps),
-        chunk_steps_(chunk_steps),
-        recorder_(plant.signals(), columns, decimation, chunk_steps),
-        metrics_(Plant::kMetrics, h_s),
-        decimation_(decimation) {
+        stepper_(plant, integrator_, 0.0, opt.step_s),
+        total_steps_(opt.total_steps),
+        chunk_steps_(opt.chunk_steps),
+        recorder_(plant.signals(), opt.columns, opt.decimation, opt.chunk_steps),
+        metrics_(Plant::kMetrics, opt.step_s),
+        decimation_(opt.decimation) {
     // commands in flight: one per ECU period of latency, and one more
     pending_.resize(static_cast<std::size_t>(latency_steps_ / std::max<std::int64_t>(1, controller_ratio_) + 2));
     x0_ = plant.initial_state();
@@ -119,49 +132,31 @@ class Runner {
     }
   }
 
-  // Run phase: advances up to chunk_steps, or max_steps if fewer (no allocation, no I/O).
-  // Returns steps taken. stop: a flag (e.g. the number of a signal) that ends the run when
-  // non-zero.
+  // Run phase: advances up to chunk_steps, or max_steps if fewer (no allocation, no I/O but a
+  // port's own). Returns steps taken. stop: a flag (e.g. the number of a signal) that ends
+  // the run when non-zero.
   std::int64_t run(const std::atomic<int>* stop = nullptr,
                    std::int64_t max_steps = std::numeric_limits<std::int64_t>::max()) {
-    const std::int64_t end = std::min(total_steps_, n_ + std::min(chunk_steps_, max_steps));
     const std::int64_t start = n_;
-    run_end_ = end;
-    if (awaiting_command_) {  // the external ECU's command for this sample is in: the outputs at t_n
-      awaiting_command_ = false;
-      observe(n_);
-    }
-    while (n_ < end && !stopped_by_fault()) {
-      if (stop != nullptr && stop->load(std::memory_order_relaxed) != 0) {
-        complete_outputs(n_);
-        recorder_.record(n_, y_);  // an interrupted run still ends with the state it reached
-        break;
-      }
-      // dx/dt (and the crossing functions) at t_n came with the outputs at t_n when nothing has
-      // moved since (same x, modes, inputs): the integrator's first stage and the crossings at
-      // the step's start, evaluations saved, the same result
-      const bool observed = dx_observed_step_ == n_;
-      const solvers::StepReport r = stepper_.advance(n_, x_, m_, inputs_, observed ? &dx_observed_ : nullptr,
-                                                     observed && z_observed_ ? z_observed_values_.data() : nullptr);
-      dx_observed_step_ = -1;
-      stats_.events += r.events;
-      stats_.chattering_steps += r.chattering ? 1 : 0;
-      stats_.newton_failures += r.converged ? 0 : 1;
-      stats_.newton_iterations += r.iterations;
-      ++n_;
-      if (pacer_ != nullptr) pacer_->wait_for_step(n_);
-      tick_controller(n_);
-      if (external_ecu_ && n_ % controller_ratio_ == 0) {
-        // an ECU sample: back to the caller, who reads the sensors at t_n and writes the
-        // command; the outputs at t_n follow with it (as the built-in ECU's do)
-        awaiting_command_ = true;
-        break;
-      }
-      observe(n_);
+    // one loop, compiled twice: without a port and a pacer (batch runs) nothing of them is
+    // tested per step
+    if (port_ != nullptr || pacer_ != nullptr) {
+      loop<true>(stop, max_steps);
+    } else {
+      loop<false>(stop, max_steps);
     }
     stats_.steps_done = n_;
     stats_.rows_dropped = recorder_.dropped();
     return n_ - start;
+  }
+
+  // Start-up (external_ecu): the ECU port from now on (the caller no longer steps to each
+  // sample), and the pacer, told that step n may start. The port's first exchange is at the
+  // current step, in the next run().
+  void attach(Port* port, StepPacer* pacer) {
+    port_ = port;
+    pacer_ = pacer;
+    if (pacer_ != nullptr) pacer_->wait_for_step(n_);
   }
 
   // For an ECU outside the runner (external_ecu: a bus, a Python callback, a test): run()
@@ -173,6 +168,8 @@ class Runner {
   void sense(S& sensors) {
     sensors.stamp = msgs::Stamp{stepper_.time_s(n_), n_, sensor_sequence_++};
     plant_.sense(sensors.stamp.time_s, x_, m_, inputs_, sensors);
+    sensors_ = sensors;  // a sample step is sampled once: a port's exchange there gets this one
+    sensed_step_ = n_;
   }
   void set_command(const Inputs& command) {
     inputs_ = command;
@@ -197,6 +194,81 @@ class Runner {
   void clear_rows() { recorder_.clear(); }
 
  private:
+  template <bool kPaced>
+  void loop(const std::atomic<int>* stop, std::int64_t max_steps) {
+    const std::int64_t end = std::min(total_steps_, n_ + std::min(chunk_steps_, max_steps));
+    run_end_ = end;
+    if (awaiting_command_ && !has_port<kPaced>()) {  // the caller's command for this sample is in: the outputs at t_n
+      awaiting_command_ = false;
+      observe(n_);
+    }
+    while (n_ < end && !stopped_by_fault()) {
+      if (stop != nullptr && stop->load(std::memory_order_relaxed) != 0) {
+        if (awaiting_command_) {  // a port's sample step, not exchanged: the plant as it got there
+          awaiting_command_ = false;
+          observe(n_);
+        }
+        complete_outputs(n_);
+        recorder_.record(n_, y_);  // an interrupted run still ends with the state it reached
+        break;
+      }
+      if (has_port<kPaced>()) exchange(n_);
+      // dx/dt (and the crossing functions) at t_n came with the outputs at t_n when nothing has
+      // moved since (same x, modes, inputs): the integrator's first stage and the crossings at
+      // the step's start, evaluations saved, the same result
+      const bool observed = dx_observed_step_ == n_;
+      const solvers::StepReport r = stepper_.advance(n_, x_, m_, inputs_, observed ? &dx_observed_ : nullptr,
+                                                     observed && z_observed_ ? z_observed_values_.data() : nullptr);
+      dx_observed_step_ = -1;
+      stats_.events += r.events;
+      stats_.chattering_steps += r.chattering ? 1 : 0;
+      stats_.newton_failures += r.converged ? 0 : 1;
+      stats_.newton_iterations += r.iterations;
+      ++n_;
+      if constexpr (kPaced) {
+        if (pacer_ != nullptr) pacer_->wait_for_step(n_);
+      }
+      tick_controller(n_);
+      if (external_ecu_ && n_ % controller_ratio_ == 0) {
+        // an ECU sample: the outputs at t_n follow with its command (as the built-in ECU's
+        // do): from the port's exchange, or back to the caller, who reads the sensors at t_n
+        // and writes the command
+        awaiting_command_ = true;
+        if (has_port<kPaced>()) continue;
+        break;
+      }
+      observe(n_);
+    }
+    // the last grid point, a sample step: its sample goes out and its command is in (and logged)
+    if (has_port<kPaced>() && n_ == total_steps_ && awaiting_command_ && !stopped_by_fault()) exchange(n_);
+  }
+
+  template <bool kPaced>
+  bool has_port() const {
+    if constexpr (kPaced) return port_ != nullptr;
+    return false;
+  }
+
+  // Run phase: the port's exchange at grid point n (hil/run/port.hpp), once per grid point;
+  // at a sample step the outputs at t_n after it.
+  void exchange(std::int64_t n) {
+    if (exchanged_step_ == n) return;
+    exchanged_step_ = n;
+    bool changed = port_->commands_due(n, inputs_);
+    if constexpr (solvers::PlantWithSensors<Plant>) {
+      if (n % controller_ratio_ == 0) {
+        if (sensed_step_ != n) sense(sensors_);  // (the caller read it at start-up: the one it sent)
+        changed = port_->sample(n, sensors_, inputs_) || changed;
+      }
+    }
+    changed = port_->before_step(n, inputs_) || changed;
+    if (changed) dx_observed_step_ = -1;  // taken with the old command
+    if (awaiting_command_) {
+      awaiting_command_ = false;
+      observe(n);
+    }
+  }
+
   bool stopped_by_fault() const { return fault_policy_ == FaultPolicy::kStop && stats_.fault != 0; }
 
   // Run phase: commands that are due apply; at a sample step the ECU reads the sensors at
@@ -291,7 +363,10 @@ class Runner {
   bool external_ecu_ = false;      // the caller is the ECU: it is asked at every sample step
   bool awaiting_command_ = false;  // stopped at a sample step, the outputs there not yet taken
   Controller* controller_;
-  Pacer* pacer_;
+  StepPacer* pacer_;
+  Port* port_ = nullptr;            // the ECU outside (attach), or none
+  std::int64_t exchanged_step_ = -1;  // the last grid point the port exchanged at
+  std::int64_t sensed_step_ = -1;     // the last grid point sense() read
   FaultPolicy fault_policy_;
   std::int64_t controller_ratio_, latency_steps_;
   struct Pending {

@@ -69,6 +69,11 @@ class Simulation {
   virtual bool read_sensors(msgs::PsdSensors&) { return false; }
   virtual bool write_command(const msgs::EvCommand&) { return false; }
   virtual bool write_command(const msgs::PsdCommand&) { return false; }
+  // Start-up (external_ecu): an ECU port and its pacer plug into the runner's step loop
+  // (hil/run/port.hpp): from then on run() and step() exchange with the port at every step
+  // instead of stopping at each sample. false: the vehicle is not of that family.
+  virtual bool attach(EcuPort<msgs::EvSensors, msgs::EvCommand>*, StepPacer*) { return false; }
+  virtual bool attach(EcuPort<msgs::PsdSensors, msgs::PsdCommand>*, StepPacer*) { return false; }
 
   virtual const RunStats& stats() const = 0;
   virtual const MetricTotals& metrics() const = 0;

@@ -25,10 +25,16 @@ class SimulationOf final : public Simulation {
     if (columns.empty()) {
       for (std::size_t i = 0; i < signals_.size(); ++i) columns.push_back(static_cast<int>(i));
     }
-    runner_ = std::make_unique<R>(*plant_, sc.solver.step_s, sc.solver.steps, sc.output.decimation, columns,
-                                  opt.chunk_steps, opt.external_ecu ? nullptr : controller_.get(),
-                                  sc.solver.ecu_ratio, sc.solver.ecu_latency_steps, nullptr, opt.fault_policy,
-                                  opt.external_ecu);
+    const RunnerOptions run{.step_s = sc.solver.step_s,
+                            .total_steps = sc.solver.steps,
+                            .decimation = sc.output.decimation,
+                            .columns = columns,
+                            .chunk_steps = opt.chunk_steps,
+                            .ecu_ratio = sc.solver.ecu_ratio,
+                            .ecu_latency_steps = sc.solver.ecu_latency_steps,
+                            .fault_policy = opt.fault_policy,
+                            .external_ecu = opt.external_ecu};
+    runner_ = std::make_unique<R>(*plant_, run, opt.external_ecu ? nullptr : controller_.get());
     values_.resize(signals_.size());
   }
 
@@ -50,6 +56,12 @@ class SimulationOf final : public Simulation {
   bool read_sensors(msgs::PsdSensors& s) override { return sense_as(s); }
   bool write_command(const msgs::EvCommand& c) override { return command_as(c); }
   bool write_command(const msgs::PsdCommand& c) override { return command_as(c); }
+  bool attach(EcuPort<msgs::EvSensors, msgs::EvCommand>* port, StepPacer* pacer) override {
+    return attach_as(port, pacer);
+  }
+  bool attach(EcuPort<msgs::PsdSensors, msgs::PsdCommand>* port, StepPacer* pacer) override {
+    return attach_as(port, pacer);
+  }
 
   const RunStats& stats() const override { return runner_->stats(); }
   const MetricTotals& metrics() const override { return runner_->metrics(); }
@@ -91,6 +103,15 @@ class SimulationOf final : public Simulation {
   bool command_as(const C& c) {
     if constexpr (std::is_same_v<C, typename Plant::Inputs>) {
       runner_->set_command(c);
+      return true;
+    }
+    return false;
+  }
+
+  template <class S, class C>
+  bool attach_as(EcuPort<S, C>* port, StepPacer* pacer) {
+    if constexpr (std::is_same_v<S, typename SensorsOf<Plant>::type> && std::is_same_v<C, typename Plant::Inputs>) {
+      runner_->attach(port, pacer);
       return true;
     }
     return false;

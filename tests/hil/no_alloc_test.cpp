@@ -23,7 +23,9 @@ std::size_t allocations_over_run(const Plant& plant, std::int64_t steps, Control
                                  std::int64_t latency_steps = 0) {
   std::vector<int> columns{0, 1, 2};
   // start-up: may allocate
-  Runner<Plant, Integrator, Controller> runner(plant, 1e-3, steps, 100, columns, steps, controller, 1, latency_steps);
+  Runner<Plant, Integrator, Controller> runner(
+      plant, {.total_steps = steps, .decimation = 100, .columns = columns, .chunk_steps = steps, .ecu_latency_steps = latency_steps},
+      controller);
   const std::size_t before = test::allocation_count();
   runner.run();  // run phase
   const std::size_t after = test::allocation_count();
@@ -60,7 +62,7 @@ TEST(NoAllocation, PowerSplitHybridWithItsEcu) {
   const plant::PsdPlant plant(p);
   ecu::PsdEcu ecu(sc.ecu.get<ecu::PsdEcuParams>(), 1e-3);
   using R = Runner<plant::PsdPlant, solvers::Rk4<plant::PsdPlant>, ecu::PsdEcu>;
-  R runner(plant, 1e-3, 400000, 100, {0, 1, 2}, 400000, &ecu, 1);  // start-up: may allocate
+  R runner(plant, {.total_steps = 400000, .decimation = 100, .columns = {0, 1, 2}, .chunk_steps = 400000}, &ecu);  // start-up: may allocate
   const std::size_t before = test::allocation_count();
   runner.run();  // run phase: 400 s, through engine starts at 145.5 s and 334.7 s and their stops
   EXPECT_EQ(test::allocation_count() - before, 0u);

@@ -37,10 +37,11 @@ static_assert(solvers::PlantWithObservation<plant::PsdPlant>);
 static_assert(!solvers::PlantWithObservation<FullOutputsOnly<plant::PsdPlant>>);
 
 // A pacer that raises the stop flag before step `at` (an interrupted run, as Ctrl-C does).
-struct StopAt {
+struct StopAt final : StepPacer {
+  StopAt(std::atomic<int>* f, std::int64_t n) : flag(f), at(n) {}
   std::atomic<int>* flag = nullptr;
   std::int64_t at = -1;
-  void wait_for_step(std::int64_t n) {
+  void wait_for_step(std::int64_t n) override {
     if (n == at) flag->store(1);
   }
 };
@@ -67,8 +68,9 @@ auto run(const Params& params, Ecu ecu, std::int64_t steps, std::int64_t decimat
   for (std::size_t i = 0; i < plant.signals().size(); ++i) columns.push_back(static_cast<int>(i));
   std::atomic<int> stop{0};
   StopAt pacer{&stop, stop_at};
-  Runner<Plant, solvers::Rk4<Plant>, Ecu, StopAt> runner(plant, 1e-3, steps, decimation, columns, chunk, &ecu,
-                                                         ecu_ratio, 0, &pacer);
+  Runner<Plant, solvers::Rk4<Plant>, Ecu> runner(
+      plant, {.total_steps = steps, .decimation = decimation, .columns = columns, .chunk_steps = chunk, .ecu_ratio = ecu_ratio},
+      &ecu, &pacer);
   Result<typename Plant::Outputs, typename Plant::State> r;
   while (!runner.finished() && stop.load() == 0) {
     runner.run(&stop);
@@ -192,8 +194,13 @@ auto run_external(const Psecu2& p, std::int64_t decimation) {
   ecu::PsdEcu ecu(p.ecu, p.ecu.period_s);
   std::vector<int> columns;
   for (std::size_t i = 0; i < plant.signals().size(); ++i) columns.push_back(static_cast<int>(i));
-  Runner<Plant, solvers::Rk4<Plant>, ecu::PsdEcu> runner(plant, 1e-3, p.steps, decimation, columns, 100000, nullptr,
-                                                          p.ratio, 0, nullptr, FaultPolicy::kStop, true);
+  Runner<Plant, solvers::Rk4<Plant>, ecu::PsdEcu> runner(plant,
+                                                          {.total_steps = p.steps,
+                                                           .decimation = decimation,
+                                                           .columns = columns,
+                                                           .chunk_steps = 100000,
+                                                           .ecu_ratio = p.ratio,
+                                                           .external_ecu = true});
   Result<typename Plant::Outputs, typename Plant::State> r;
   msgs::PsdSensors sensors;
   msgs::PsdCommand command;

@@ -32,8 +32,14 @@ void compare(const Scenario& sc, const Plant& plant, const io::CsvTable& ref, Co
   }
   const double interval_s = ref.columns[0][1] - ref.columns[0][0];
   const auto decimation = std::llround(interval_s / sc.solver.step_s);
-  Runner<Plant, solvers::Rk4<Plant>, Controller> runner(plant, sc.solver.step_s, sc.solver.steps, decimation, columns,
-                                                       sc.solver.steps, controller, sc.solver.ecu_ratio);
+  Runner<Plant, solvers::Rk4<Plant>, Controller> runner(plant,
+                                                       {.step_s = sc.solver.step_s,
+                                                        .total_steps = sc.solver.steps,
+                                                        .decimation = decimation,
+                                                        .columns = columns,
+                                                        .chunk_steps = sc.solver.steps,
+                                                        .ecu_ratio = sc.solver.ecu_ratio},
+                                                       controller);
   runner.run();
   const auto rows = runner.rows();
   ASSERT_EQ(rows.size(), ref.rows() * columns.size());

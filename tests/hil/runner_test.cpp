@@ -17,7 +17,7 @@ std::vector<double> run_all(const plant::BevPlant& plant, std::int64_t steps, st
   std::vector<int> columns;
   for (std::size_t i = 0; i < plant.signals().size(); ++i) columns.push_back(static_cast<int>(i));
   ecu::EvFollower follower;
-  BevRk4 runner(plant, 1e-3, steps, 10, columns, chunk, &follower);
+  BevRk4 runner(plant, {.total_steps = steps, .decimation = 10, .columns = columns, .chunk_steps = chunk}, &follower);
   std::vector<double> rows;
   while (!runner.finished()) {
     runner.run();
@@ -46,7 +46,7 @@ TEST(Runner, StopsAtTheFirstFaultAndRecordsIt) {
   p.battery.soc_min = 0.6999;  // SOC leaves the window as soon as the car draws power
   const plant::BevPlant plant(p);
   ecu::EvFollower follower;
-  BevRk4 runner(plant, 1e-3, 150000, 100, {0}, 150000, &follower);
+  BevRk4 runner(plant, {.total_steps = 150000, .decimation = 100, .columns = {0}, .chunk_steps = 150000}, &follower);
   runner.run();
   EXPECT_TRUE(runner.finished());
   EXPECT_EQ(runner.stats().fault, plant::kFaultSocWindow);
@@ -74,7 +74,13 @@ TEST(Runner, ACommandActsLatencyStepsAfterItsSample) {
   for (const std::int64_t latency : {0, 1, 7}) {
     for (const std::int64_t period : {1, 5}) {
       ecu::EvFollower follower;
-      BevRk4 runner(plant, 1e-3, 3000, 1, {request, reference}, 3000, &follower, period, latency);
+      BevRk4 runner(plant,
+                    {.total_steps = 3000,
+                     .columns = {request, reference},
+                     .chunk_steps = 3000,
+                     .ecu_ratio = period,
+                     .ecu_latency_steps = latency},
+                    &follower);
       runner.run();
       const auto rows = runner.rows();
       ASSERT_EQ(rows.size(), 2u * 3001u);
@@ -104,7 +110,8 @@ TEST(Runner, MessagesAreStampedWithTheirSample) {
   const plant::BevPlant plant(test::mbev());
   SpyEcu spy;
   spy.sensor_stamps.reserve(100);
-  Runner<plant::BevPlant, solvers::Rk4<plant::BevPlant>, SpyEcu> runner(plant, 1e-3, 100, 1, {0}, 100, &spy, 10, 0);
+  Runner<plant::BevPlant, solvers::Rk4<plant::BevPlant>, SpyEcu> runner(
+      plant, {.total_steps = 100, .columns = {0}, .chunk_steps = 100, .ecu_ratio = 10}, &spy);
   runner.run();
   ASSERT_EQ(spy.sensor_stamps.size(), 11u);  // steps 0, 10, ..., 100
   for (std::size_t k = 0; k < spy.sensor_stamps.size(); ++k) {

@@ -47,7 +47,8 @@ Seen compare_over_run(const Plant& plant, Ecu& ecu, std::int64_t steps, std::int
   using Outputs = typename Plant::Outputs;
   using State = typename Plant::State;
   constexpr int kZ = Plant::kNumCrossings;
-  hil::Runner<Plant, solvers::Rk4<Plant>, Ecu> runner(plant, 1e-3, steps, steps, {0}, 1, &ecu, ecu_ratio);
+  hil::Runner<Plant, solvers::Rk4<Plant>, Ecu> runner(
+      plant, {.total_steps = steps, .decimation = steps, .columns = {0}, .chunk_steps = 1, .ecu_ratio = ecu_ratio}, &ecu);
   const auto& src = Plant::kMetrics;
   // the fields observe() fills: those kMetrics names, and fault
   std::vector<double Outputs::*> observed{&Outputs::fault};

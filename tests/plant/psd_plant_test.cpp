@@ -40,7 +40,7 @@ Driven drive(const Psecu& p, double duration_s, F f, EnergyAudit* audit = nullpt
   const PsdPlant plant(p.plant);
   PsdEcu ecu(p.ecu, 1e-3);
   const auto steps = std::llround(duration_s / 1e-3);
-  PsdRunner runner(plant, 1e-3, steps, steps, {0}, 1, &ecu, 1);  // one step per run(): observe each
+  PsdRunner runner(plant, {.total_steps = steps, .decimation = steps, .columns = {0}, .chunk_steps = 1}, &ecu);  // one step per run(): observe each
   while (!runner.finished()) {
     runner.run();
     runner.clear_rows();
