@@ -3,216 +3,103 @@
 // Battery-electric vehicle with a map-based one-flange drive: MBEV, MODELS.md §10.3
 // (tutorial §4), built from PropDriver (§8), OneFlange (§1), Batt1 (§6), DragForce (§7) and
 // the vehicle of §7.4. Paper: P15 §5.1 (same structure as EvPm_bat, map-based drive).
+// The vehicle is EvPlant (ev_plant.hpp); this file holds its drive, MapDrive (map_drive.hpp)
+// as an EvPlant Drive:
 //
-//   driver:   tau_req = clamp(k (v_ref(t) - v), -yMax, yMax)            (N m at the drive shaft)
-//             the person at the wheel, part of the plant: a sensor (driverRequest_Nm) for the ECU
-//   ECU:      tau_cmd, the command (msgs::EvCommand, the plant's Inputs), held over each ECU
-//             period; the built-in ECU (ecu::EvFollower) sets tau_cmd = tau_req at each sample
 //   drive:    w = v G / r;  tau = clamp(tau_cmd, -tau_lim(w), tau_lim(w));  P_dc from the map
-//   brake:    the braking the drive cannot deliver: F_brake = (G / r) max(0, tau - tau_cmd),
-//             opposing motion (MBEV's gain G*r is a source defect, §10.3; flag brake_library_gain).
-//             brake.after_rotor_inertia: MBEV's signal, max(0, tau - J dw/dt - tau_req); with
-//             dw/dt = (G/r) dv/dt this is an algebraic loop, linear on each branch, solved
-//             exactly (unique while the gain times J (G/r) is below the effective mass)
-//   battery:  supplies P_dc (constant-power load on the RC pack)
-//   body:     (m + J (G/r)^2) dv/dt = tau G/r - F_roll - F_v(v) - m g sin(alpha) - F_brake
-//             ds/dt = v,  dh/dt = v sin(alpha)
-//   stuck:    dv/dt = 0 while |tau G/r - m g sin(alpha)| <= F_roll + F_brake   (locked, §7.2)
-//
-// State (one flat vector, offsets composed from the components' sizes): v (m/s); the
-// VehicleBody's s (m), h (m), road-load work and brake dissipation (J); the battery's E and
-// v_rc (V); the plant's energy integrals (J): battery terminal energy out, drive losses,
-// battery losses. The integrals feed the energy audit:
-//     stored-energy decrease = road work + drive losses + battery losses + brake
-//                              + change of kinetic energy (vehicle + rotor) + m g (h - h0)
-// Crossing 0 (one function per mode, always falling through zero):
-//   kForward:  z = v                -> stop: v := 0, then stuck or restart per motion_at_rest
-//   kBackward: z = -v               -> same
-//   kStuck:    z = F_breakaway - |F_applied|  -> start in the direction of F_applied
+//   brake:    brake.after_rotor_inertia, MBEV's brake signal, is this drive's (kMbevBrakeSignal)
 
+#include <algorithm>
 #include <array>
-#include <span>
 
-#include <Eigen/Core>
-
-#include "msgs/ev.hpp"
 #include "plant/battery_rc.hpp"
-#include "plant/ev_state.hpp"
+#include "plant/ev_plant.hpp"
 #include "plant/map_drive.hpp"
-#include "plant/prop_driver.hpp"
-#include "plant/road_load.hpp"
+#include "plant/problems.hpp"
 #include "plant/signals.hpp"
-#include "plant/vehicle_body.hpp"
 
 namespace ehpt::plant {
 
-struct BevParams {
-  VehicleBodyParams body;
-  RoadLoadParams road;
-  MapDriveParams drive;
-  BatteryRcParams battery;
-  PropDriverParams driver;
-  BrakeParams brake;
-};
-
-void validate(const BevParams& p, Problems& problems);
-
-class BevPlant : public EvStateLayout {
+// MapDrive (map_drive.hpp) as the EV's drive.
+class MapMachine {
  public:
-  // the state: EvStateLayout (ev_state.hpp), [v | VehicleBody | BatteryRc | energy integrals]
-  static constexpr int kNumCrossings = 1;
-  using State = Eigen::Matrix<double, kNumStates, 1>;
-  struct Modes {
-    Motion motion = Motion::kStuck;
-  };
-  using Params = BevParams;
-  using Inputs = msgs::EvCommand;  // held over each ECU period
-  using Sensors = msgs::EvSensors;
-
+  using Params = MapDriveParams;
+  using Point = DriveOperatingPoint;
   struct Outputs {
-    double time_s = 0, speed_ref_m_s = 0, speed_m_s = 0, distance_m = 0, acceleration_m_s2 = 0;
-    double driver_request_Nm = 0, drive_torque_ref_Nm = 0, drive_torque_Nm = 0, drive_torque_limit_Nm = 0;
-    double drive_limit_state = 0;
-    double drive_limiting = 0, drive_speed_rad_s = 0, drive_power_mech_W = 0, drive_power_dc_W = 0;
-    double drive_efficiency = 0, brake_force_N = 0, road_force_N = 0, grade_rad = 0, altitude_m = 0;
-    double battery_voltage_V = 0, battery_current_A = 0, battery_power_W = 0, battery_emf_V = 0, soc = 0;
-    double locked = 0, fault = 0;
-    double battery_out_J = 0, road_work_J = 0, drive_loss_J = 0, battery_loss_J = 0, brake_work_J = 0;
+    double drive_torque_limit_Nm = 0, drive_limit_state = 0, drive_limiting = 0, drive_efficiency = 0;
   };
-  static const std::array<Signal<Outputs>, 31> kSignals;
-  static constexpr MetricSources<Outputs> kMetrics{.speed_ref_m_s = &Outputs::speed_ref_m_s,
-                                                   .speed_m_s = &Outputs::speed_m_s,
-                                                   .locked = &Outputs::locked,
-                                                   .distance_m = &Outputs::distance_m,
-                                                   .soc = &Outputs::soc};
+  static constexpr int kNumCrossings = 0;  // the limiter's states are kinks of a continuous map
+  struct Mode {};
+  static constexpr bool kMbevBrakeSignal = true;
 
-  explicit BevPlant(const BevParams& params);  // start-up: params already validated
+  explicit MapMachine(const Params& p) : drive_(p) {}
+  // the map drive has no voltage limit: u_dc is not used
+  [[gnu::always_inline]] Point operate(double torque_ref_Nm, double speed_rad_s, double) const {
+    return drive_.operate(torque_ref_Nm, speed_rad_s);
+  }
+  // at rest the drive speed is 0, so the limit is tau_max (state 0)
+  [[gnu::always_inline]] double torque_at_rest_Nm(double torque_ref_Nm, double) const {
+    const double tau_max_Nm = drive_.params().torque_max_Nm;
+    return std::clamp(torque_ref_Nm, -tau_max_Nm, tau_max_Nm);
+  }
+  double inertia_kgm2() const { return drive_.params().inertia_kgm2; }
+  // For the ECU (driveTauLim): the limiter bound yH at this speed.
+  double torque_limit_Nm(const Point& op, double) const { return op.limit_Nm; }
+  static double torque_Nm(const Point& op) { return op.torque_Nm; }
+  static double power_dc_W(const Point& op) { return op.power_dc_W; }
+  static unsigned faults(const Point&) { return 0u; }  // closed forms
+  static void fill(const Point& op, Outputs& y) {
+    y.drive_torque_limit_Nm = op.limit_Nm;
+    y.drive_limit_state = op.limit_state;
+    y.drive_limiting = op.limiting ? 1.0 : 0.0;
+    y.drive_efficiency = op.efficiency;
+  }
+  static void validate_with_battery(const Params&, const BatteryRcParams&, Problems&) {}  // no voltage limit
 
-  State initial_state() const;
-  Modes initial_modes(const State& x0) const;
-
-  // Run phase: pure functions, no allocation.
-  // (defined below, inline: the integrators inline it into their stages)
-  void derivatives(double t_s, const State& x, const Modes& m, const Inputs& u, State& dx) const;
-  void crossings(double t_s, const State& x, const Modes& m, const Inputs& u, double* z) const;
-  void on_crossing(int index, double t_s, State& x, Modes& m, const Inputs& u) const;
-  void outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const;
-  // The outputs and dx/dt from one evaluation: the runner hands dx/dt to the integrator as the
-  // first stage of the next step (same t, x, modes, inputs), which saves one evaluation.
-  void outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx) const;
-  // What the ECU reads at t_s (the stamp is the runner's).
-  void sense(double t_s, const State& x, const Modes& m, const Inputs& u, Sensors& s) const;
-  // The runner's observation at a grid point it does not record (solvers/plant.hpp), from one
-  // evaluation: the outputs kMetrics names and fault (the other fields of y are left as they
-  // were), dx/dt and the crossing functions z, each bit for bit what outputs(), derivatives()
-  // and crossings() give at the same point.
-  void observe(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx, double* z) const;
-
-  std::span<const Signal<Outputs>> signals() const { return kSignals; }
-  // Energy audit between x0 and x (end of run; allocates).
-  EnergyAudit audit(const State& x0, const State& x) const;
-
-  const BevParams& params() const { return p_; }
-  const BatteryRc& battery() const { return battery_; }
+  // MBEV's signals, in its column order (the library's names in parentheses).
+  template <class O>
+  static constexpr std::array<Signal<O>, 31> ev_signals() {
+    return {{
+        {"time_s", &O::time_s, "simulation time"},
+        {"speed_ref_m_s", &O::speed_ref_m_s, "cycle (wanted) speed"},
+        {"speed_m_s", &O::speed_m_s, "vehicle speed"},
+        {"distance_m", &O::distance_m, "travelled distance"},
+        {"acceleration_m_s2", &O::acceleration_m_s2, "vehicle acceleration"},
+        {"driver_request_Nm", &O::driver_request_Nm, "driver torque request at the drive shaft (driverRequest)"},
+        {"drive_torque_ref_Nm", &O::drive_torque_ref_Nm, "torque the ECU asks of the drive (driveTauRef)"},
+        {"drive_torque_Nm", &O::drive_torque_Nm, "torque the drive applies (after the limiter)"},
+        {"drive_torque_limit_Nm", &O::drive_torque_limit_Nm, "limiter bound yH (genTauLim)"},
+        {"drive_limit_state", &O::drive_limit_state, "limiter state 0 torque, 1 power, 2 speed ramp, 3 over speed"},
+        {"drive_limiting", &O::drive_limiting, "1 when the limiter cuts the request"},
+        {"drive_speed_rad_s", &O::drive_speed_rad_s, "drive shaft speed"},
+        {"drive_power_mech_W", &O::drive_power_mech_W, "mechanical power torque x speed"},
+        {"drive_power_dc_W", &O::drive_power_dc_W, "DC power drawn by the drive"},
+        {"drive_efficiency", &O::drive_efficiency, "efficiency from the map"},
+        {"brake_force_N", &O::brake_force_N, "friction-brake force magnitude"},
+        {"road_force_N", &O::road_force_N, "road load (rolling + aero), or the locked reaction"},
+        {"grade_rad", &O::grade_rad, "road angle, > 0 uphill"},
+        {"altitude_m", &O::altitude_m, "altitude gained since start"},
+        {"battery_voltage_V", &O::battery_voltage_V, "terminal voltage"},
+        {"battery_current_A", &O::battery_current_A, "terminal current, > 0 discharging"},
+        {"battery_power_W", &O::battery_power_W, "terminal power v i (batPowDel)"},
+        {"battery_emf_V", &O::battery_emf_V, "EMF E"},
+        {"soc", &O::soc, "state of charge (batSOC)"},
+        {"locked", &O::locked, "1 while the vehicle is stuck at standstill (dragForce.locked)"},
+        {"fault", &O::fault, "fault bits: 1 SOC window, 2 cell current, 4 power infeasible, 8 non-finite"},
+        {"battery_out_J", &O::battery_out_J, "integral of terminal power"},
+        {"road_work_J", &O::road_work_J, "integral of road-load power"},
+        {"drive_loss_J", &O::drive_loss_J, "integral of drive losses"},
+        {"battery_loss_J", &O::battery_loss_J, "integral of battery losses"},
+        {"brake_work_J", &O::brake_work_J, "integral of brake dissipation"},
+    }};
+  }
 
  private:
-  struct Eval;  // everything one evaluation computes (the driver is not needed for it)
-  Eval evaluate(const State& x, const Modes& m, const Inputs& u) const;
-  void derivatives_from(const Eval& e, const State& x, State& dx) const;
-  void outputs_from(const Eval& e, double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const;
-  // At rest (v = 0): the force the road must hold, and the break-away threshold. A lean
-  // version of evaluate() for the stuck-mode crossing, which runs twice per step.
-  struct AtRest {
-    double applied_N, breakaway_N;
-  };
-  AtRest at_rest(const State& x, const Inputs& u) const;
-
-  BevParams p_;
   MapDrive drive_;
-  BatteryRc battery_;
-  VehicleBody body_;
-  double g_over_r_ = 0.0;        // drive speed per vehicle speed (rad/m)
-  double mass_eff_kg_ = 0.0;     // vehicle + rotor reflected
-  double inv_mass_eff_kg_ = 0.0;
-  double brake_inertia_kg_ = 0.0;  // after_rotor_inertia: brake_gain * J * G/r (0 otherwise)
 };
 
-struct BevPlant::Eval {
-  DriveOperatingPoint drive;
-  BatteryTerminal battery;
-  double drive_speed_rad_s;
-  double grade_rad;
-  double rolling_N;      // Coulomb part (also the break-away force)
-  double speed_force_N;  // aero / viscous part, odd in v
-  double brake_N;        // magnitude
-  double applied_N;      // drive force minus grade force: what the road must hold while stuck ("sa" of §7.2)
-  double road_N;         // reaction of the road (rolling + speed part, or sa when stuck)
-  double accel_m_s2;
-};
-
-// Run phase: no allocation. Always inlined, so that each caller computes only what it uses. In the
-// header, with derivatives(), so that an integrator inlines every stage (solvers/integrators.hpp).
-[[gnu::always_inline]] inline BevPlant::Eval BevPlant::evaluate(const State& x, const Modes& m, const Inputs& u) const {
-  const double v = x[kSpeed];
-  // the drive follows the ECU's command, a shaft torque; the limiter may cut it
-  const double drive_speed_rad_s = v * g_over_r_;
-  const DriveOperatingPoint op = drive_.operate(u.driveTauRef_Nm, drive_speed_rad_s);
-  // forces at the wheel; the friction brake supplies the braking the drive could not
-  const VehicleBody::Forces f = body_.forces(v, x[kDistance]);
-  const double grade_rad = f.grade_rad, rolling_N = f.rolling_N, speed_force_N = f.speed_force_N;
-  const double unmet_braking_Nm = op.torque_Nm - u.driveTauRef_Nm;
-  double brake_N = body_.brake_N(unmet_braking_Nm);
-  const double tractive_N = op.torque_Nm * g_over_r_;
-  const double applied_N = tractive_N - f.grade_force_N;
-  // stuck: the road reacts with the applied force, no acceleration; moving: road load and
-  // brake oppose the motion (d = +1 forward, -1 backward)
-  double road_N = applied_N, accel_m_s2 = 0.0;
-  if (m.motion != Motion::kStuck) {
-    const double d = m.motion == Motion::kForward ? 1.0 : -1.0;
-    road_N = d * rolling_N + speed_force_N;
-    accel_m_s2 = (applied_N - road_N - d * brake_N) * inv_mass_eff_kg_;
-    if (brake_inertia_kg_ > 0.0) {
-      // MBEV's brake signal: max(0, unmet - J (G/r) a). Without the brake, a0 above; if the
-      // signal is positive there, the active branch m_eff a = F - d k (unmet - J (G/r) a) holds
-      const double gain = body_.brake_gain_N_per_Nm();
-      const double signal_N = gain * unmet_braking_Nm - brake_inertia_kg_ * ((applied_N - road_N) * inv_mass_eff_kg_);
-      if (signal_N > 0.0) {
-        accel_m_s2 = (applied_N - road_N - d * gain * unmet_braking_Nm) / (mass_eff_kg_ - d * brake_inertia_kg_);
-        brake_N = gain * unmet_braking_Nm - brake_inertia_kg_ * accel_m_s2;
-      } else {
-        brake_N = 0.0;
-        accel_m_s2 = (applied_N - road_N) * inv_mass_eff_kg_;
-      }
-    }
-  }
-  // the battery supplies the drive's DC power
-  return Eval{.drive = op,
-              .battery = battery_.terminal(x[kEmf], x[kVrc], op.power_dc_W),
-              .drive_speed_rad_s = drive_speed_rad_s,
-              .grade_rad = grade_rad,
-              .rolling_N = rolling_N,
-              .speed_force_N = speed_force_N,
-              .brake_N = brake_N,
-              .applied_N = applied_N,
-              .road_N = road_N,
-              .accel_m_s2 = accel_m_s2};
-}
-
-// Inlined into derivatives() (the RK4 stages) and outputs(): one evaluation, no copy of it.
-[[gnu::always_inline]] inline void BevPlant::derivatives_from(const Eval& e, const State& x, State& dx) const {
-  const double v = x[kSpeed];
-  dx[kSpeed] = e.accel_m_s2;
-  body_.derivatives(v, {e.grade_rad, e.rolling_N, e.speed_force_N, 0.0}, e.brake_N, dx.data() + kBodyAt);
-  dx[kEmf] = battery_.demf_dt(e.battery);
-  dx[kVrc] = battery_.dvrc_dt(e.battery, x[kVrc]);
-  // energy integrals for the audit (all zero while stuck because v = 0)
-  dx[kBatteryOutJ] = e.battery.voltage_V * e.battery.current_A;
-  dx[kDriveLossJ] = e.drive.power_dc_W - e.drive.power_mech_W;
-  dx[kBatteryLossJ] = e.battery.loss_W;
-}
-
-[[gnu::always_inline]] inline void BevPlant::derivatives(double, const State& x, const Modes& m, const Inputs& u, State& dx) const {
-  derivatives_from(evaluate(x, m, u), x, dx);
-}
+using BevPlant = EvPlant<MapMachine>;
+using BevParams = EvParams<MapMachine>;
+extern template class EvPlant<MapMachine>;
 
 }  // namespace ehpt::plant

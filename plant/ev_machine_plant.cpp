@@ -41,7 +41,7 @@ void AmMachine::validate_with_battery(const Params& p, const BatteryRcParams& b,
   check_set_voltage("drive.U_base_rms_V", p.U_base_rms_V, b, problems);
 }
 
-template class EvMachinePlant<PmMachine>;
-template class EvMachinePlant<AmMachine>;
+template class EvPlant<PmMachine>;
+template class EvPlant<AmMachine>;
 
 }  // namespace ehpt::plant

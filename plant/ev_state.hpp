@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
-// What the battery-electric vehicles share beyond their components: the map-based EV
-// (bev_plant.hpp) and the machine-drive EVs (ev_machine_plant.hpp) have one state layout,
+// What the battery-electric vehicles (EvPlant, ev_plant.hpp: the map-based EV and the
+// machine-drive EVs) share beyond their components: one state layout,
 //   [v | VehicleBody (s, h, road work, brake work) | BatteryRc (E, v_rc) |
 //    battery terminal energy out, drive losses, battery losses]        (m/s, m, J, V)
 // and one energy balance over it:
@@ -32,18 +32,6 @@ struct EvStateLayout {
   static constexpr std::array<int, 6> kAuditOnlyStates = {kAltitude, kRoadJ, kBrakeJ, kBatteryOutJ, kDriveLossJ,
                                                           kBatteryLossJ};
 };
-
-// The outputs the runner's observation needs from an EV's state (solvers/plant.hpp
-// PlantWithObservation): the metrics' fields, the same expressions as each plant's outputs.
-template <class Outputs, class State>
-inline void ev_metric_outputs(double speed_ref_m_s, const State& x, const BatteryRc& battery, Motion motion,
-                              Outputs& y) {
-  y.speed_ref_m_s = speed_ref_m_s;
-  y.speed_m_s = x[EvStateLayout::kSpeed];
-  y.distance_m = x[EvStateLayout::kDistance];
-  y.soc = battery.soc(x[EvStateLayout::kEmf]);
-  y.locked = motion == Motion::kStuck ? 1.0 : 0.0;
-}
 
 // The balance above between the states x0 and x (kNumStates values each; end of run, allocates).
 // mass_eff_kg: vehicle + rotor reflected (kinetic energy); mass_kg: the vehicle (potential).

@@ -32,15 +32,19 @@ struct DriverOutput {
   double brake = 0.0;
 };
 
-// Run phase: pure function.
-[[gnu::always_inline]] inline DriverOutput drive(const PropDriverParams& p, double t_s, double speed_m_s) {
-  const double speed_ref_m_s = p.cycle_m_s(t_s);
+// Run phase: pure functions. drive_at: the driver for a speed reference already read from the
+// cycle (a plant that reads v_ref(t) for its metrics computes the request from the same value).
+[[gnu::always_inline]] inline DriverOutput drive_at(const PropDriverParams& p, double speed_ref_m_s,
+                                                    double speed_m_s) {
   const double u = p.gain * (speed_ref_m_s - speed_m_s);
   const double request = u > p.request_max ? p.request_max : (u < p.request_min ? p.request_min : u);
   return {.speed_ref_m_s = speed_ref_m_s,
           .request = request,
           .accel = request > 0.0 ? request : 0.0,
           .brake = request < 0.0 ? request : 0.0};
+}
+[[gnu::always_inline]] inline DriverOutput drive(const PropDriverParams& p, double t_s, double speed_m_s) {
+  return drive_at(p, p.cycle_m_s(t_s), speed_m_s);
 }
 
 }  // namespace ehpt::plant

@@ -98,12 +98,19 @@ PsdPlant::Eval PsdPlant::evaluate(double t_s, const State& x, const Modes& m, co
   return eval(t_s, x, m, u);
 }
 
+[[gnu::always_inline]] inline unsigned PsdPlant::faults(const Eval& e, const State& x) const {
+  return battery_.faults(x[kEmf], e.battery) | (all_finite(x) ? 0u : kFaultNonFinite);
+}
+
+[[gnu::always_inline]] inline double PsdPlant::stuck_crossing(const Eval& e) {
+  return VehicleBody::stuck_crossing(e.applied_N, e.rolling_N + e.brake_N);
+}
+
 void PsdPlant::crossings(double t_s, const State& x, const Modes& m, const Inputs& u, double* z) const {
   if (m.motion != Motion::kStuck) {
     z[0] = VehicleBody::moving_crossing(m.motion, x[kRingSpeed]);
   } else {
-    const Eval e = eval(t_s, x, m, u);
-    z[0] = VehicleBody::stuck_crossing(e.applied_N, e.rolling_N + e.brake_N);
+    z[0] = stuck_crossing(eval(t_s, x, m, u));
   }
 }
 
@@ -140,7 +147,7 @@ void PsdPlant::on_crossing(int, double t_s, State& x, Modes& m, const Inputs& u)
   bus.speed_m_s = e.speed_m_s;
   bus.battery_voltage_V = e.battery.voltage_V;
   bus.battery_current_A = e.battery.current_A;
-  bus.fault = battery_.faults(x[kEmf], e.battery) | (all_finite(x) ? 0u : kFaultNonFinite);
+  bus.fault = faults(e, x);
   bus.locked = m.motion == Motion::kStuck;
 }
 
@@ -148,61 +155,12 @@ void PsdPlant::sense(double t_s, const State& x, const Modes& m, const Inputs& u
   sense_from(eval(t_s, x, m, u), x, m, s);
 }
 
+// The outputs, once for both sets (observation.hpp): the observed fields outside the
+// `if constexpr`, the rest inside.
+template <OutputSet kSet>
 [[gnu::always_inline]] inline void PsdPlant::outputs_from(const Eval& e, double t_s, const State& x,
                                                           const Modes& m, const Inputs& u, Outputs& y) const {
-  Sensors bus;
-  sense_from(e, x, m, bus);
-  y.time_s = t_s;
-  y.speed_ref_m_s = e.driver.speed_ref_m_s;
-  y.speed_m_s = e.speed_m_s;
-  y.distance_m = x[kDistance];
-  y.driverRequest = bus.driverRequest;
-  y.iceW_rad_s = x[kIceSpeed];
-  y.ice_torque_Nm = e.ice_torque_Nm;
-  y.icePowDel_W = bus.icePowDel_W;
-  y.icePowRef_W = u.icePowRef_W;
-  y.iceON = ice_.running(u.iceON) ? 1.0 : 0.0;
-  y.fuel_rate_g_s = 1e3 * e.fuel_rate_kg_s;
-  y.fuel_g = 1e3 * x[kFuelKg];
-  y.sfc_g_kWh = e.ice_torque_Nm > 0.0 ? ice_.sfc_g_kWh(e.ice_torque_Nm, x[kIceSpeed]) : 0.0;
-  y.genW_rad_s = e.sun_speed_rad_s;
-  y.genTauRef_Nm = u.genTauRef_Nm;
-  y.gen_torque_Nm = e.gen.torque_Nm;
-  y.genTauLim_Nm = e.gen.limit_Nm;
-  y.genPowDel_W = bus.genPowDel_W;
-  y.gen_power_dc_W = e.gen.power_dc_W;
-  y.motW_rad_s = x[kRingSpeed];
-  y.motTauRef_Nm = u.motTauRef_Nm;
-  y.mot_torque_Nm = e.mot.torque_Nm;
-  y.motTauLim_Nm = e.mot.limit_Nm;
-  y.motPowDelA_W = bus.motPowDelA_W;
-  y.motPowDelB_W = bus.motPowDelB_W;
-  y.mot_power_dc_W = e.mot.power_dc_W;
-  y.brake_force_N = e.brake_N;
-  y.road_force_N = e.road_N;
-  y.grade_rad = e.grade_rad;
-  y.battery_voltage_V = e.battery.voltage_V;
-  y.battery_current_A = e.battery.current_A;
-  y.battery_power_W = bus.batPowDel_W;
-  y.soc = bus.batSOC;
-  y.locked = bus.locked ? 1.0 : 0.0;
-  y.fault = bus.fault;
-}
-
-void PsdPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const {
-  outputs_from(eval(t_s, x, m, u), t_s, x, m, u, y);
-}
-
-void PsdPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx) const {
-  const Eval e = eval(t_s, x, m, u);
-  outputs_from(e, t_s, x, m, u, y);
-  derivatives_from(e, x, dx);
-}
-
-// The same expressions as outputs_from(), derivatives_from() and crossings(), from one evaluation.
-void PsdPlant::observe(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx,
-                       double* z) const {
-  const Eval e = eval(t_s, x, m, u);
+  constexpr bool kAll = kSet == OutputSet::kAll;
   y.speed_ref_m_s = e.driver.speed_ref_m_s;
   y.speed_m_s = e.speed_m_s;
   y.distance_m = x[kDistance];
@@ -210,10 +168,59 @@ void PsdPlant::observe(double t_s, const State& x, const Modes& m, const Inputs&
   y.fuel_g = 1e3 * x[kFuelKg];
   y.soc = battery_.soc(x[kEmf]);
   y.locked = m.motion == Motion::kStuck ? 1.0 : 0.0;
-  y.fault = battery_.faults(x[kEmf], e.battery) | (all_finite(x) ? 0u : kFaultNonFinite);
+  y.fault = faults(e, x);
+  if constexpr (kAll) {
+    Sensors bus;
+    sense_from(e, x, m, bus);
+    y.time_s = t_s;
+    y.driverRequest = bus.driverRequest;
+    y.iceW_rad_s = x[kIceSpeed];
+    y.ice_torque_Nm = e.ice_torque_Nm;
+    y.icePowDel_W = bus.icePowDel_W;
+    y.icePowRef_W = u.icePowRef_W;
+    y.fuel_rate_g_s = 1e3 * e.fuel_rate_kg_s;
+    y.sfc_g_kWh = e.ice_torque_Nm > 0.0 ? ice_.sfc_g_kWh(e.ice_torque_Nm, x[kIceSpeed]) : 0.0;
+    y.genW_rad_s = e.sun_speed_rad_s;
+    y.genTauRef_Nm = u.genTauRef_Nm;
+    y.gen_torque_Nm = e.gen.torque_Nm;
+    y.genTauLim_Nm = e.gen.limit_Nm;
+    y.genPowDel_W = bus.genPowDel_W;
+    y.gen_power_dc_W = e.gen.power_dc_W;
+    y.motW_rad_s = x[kRingSpeed];
+    y.motTauRef_Nm = u.motTauRef_Nm;
+    y.mot_torque_Nm = e.mot.torque_Nm;
+    y.motTauLim_Nm = e.mot.limit_Nm;
+    y.motPowDelA_W = bus.motPowDelA_W;
+    y.motPowDelB_W = bus.motPowDelB_W;
+    y.mot_power_dc_W = e.mot.power_dc_W;
+    y.brake_force_N = e.brake_N;
+    y.road_force_N = e.road_N;
+    y.grade_rad = e.grade_rad;
+    y.battery_voltage_V = e.battery.voltage_V;
+    y.battery_current_A = e.battery.current_A;
+    y.battery_power_W = bus.batPowDel_W;
+  }
+}
+
+void PsdPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const {
+  outputs_from<OutputSet::kAll>(eval(t_s, x, m, u), t_s, x, m, u, y);
+}
+
+void PsdPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx) const {
+  const Eval e = eval(t_s, x, m, u);
+  outputs_from<OutputSet::kAll>(e, t_s, x, m, u, y);
   derivatives_from(e, x, dx);
-  z[0] = m.motion != Motion::kStuck ? VehicleBody::moving_crossing(m.motion, x[kRingSpeed])
-                                    : VehicleBody::stuck_crossing(e.applied_N, e.rolling_N + e.brake_N);
+}
+
+// outputs_from(), derivatives_from() and crossings() from one evaluation (while stuck,
+// crossings() would evaluate again: the same e).
+void PsdPlant::observe(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx,
+                       double* z) const {
+  static_assert(kObservationTested<PsdPlant>, "list the plant in ObservedPlants (plant/observation.hpp)");
+  const Eval e = eval(t_s, x, m, u);
+  outputs_from<OutputSet::kObserved>(e, t_s, x, m, u, y);
+  derivatives_from(e, x, dx);
+  z[0] = m.motion != Motion::kStuck ? VehicleBody::moving_crossing(m.motion, x[kRingSpeed]) : stuck_crossing(e);
 }
 
 double PsdPlant::kinetic_energy_J(const State& x) const {

@@ -33,7 +33,7 @@
 // Energy audit: fuel chemical energy + battery stored-energy decrease = road work + engine
 // losses (fuel energy - engine work) + gen, mot and battery losses + brake
 // + change of kinetic energy (1/2 w' M w: vehicle and every rotating part) + m g dh.
-// Crossing 0 as for the EV (plant/bev_plant.hpp), on w_r.
+// Crossing 0 as for the EV (plant/ev_plant.hpp), on w_r.
 
 #include <array>
 #include <span>
@@ -41,11 +41,11 @@
 #include <Eigen/Core>
 
 #include "plant/battery_rc.hpp"
-#include "plant/bev_plant.hpp"
 #include "plant/map_drive.hpp"
 #include "plant/map_ice.hpp"
 #include "plant/prop_driver.hpp"
 #include "msgs/psd.hpp"
+#include "plant/observation.hpp"
 #include "plant/road_load.hpp"
 #include "plant/vehicle_body.hpp"
 #include "plant/signals.hpp"
@@ -89,6 +89,7 @@ class PsdPlant {
   struct Modes {
     Motion motion = Motion::kStuck;
   };
+  using Params = PsdParams;
   using Inputs = msgs::PsdCommand;  // held over each ECU period
   using Sensors = msgs::PsdSensors;
 
@@ -133,8 +134,9 @@ class PsdPlant {
   // The runner's observation at a grid point it does not record (solvers/plant.hpp), from one
   // evaluation: the outputs kMetrics names and fault (the other fields of y are left as they
   // were), dx/dt and the crossing functions z, each bit for bit what outputs(), derivatives()
-  // and crossings() give at the same point. The runner hands dx and z to the next step (its
-  // first stage, and the crossings at its start: two evaluations while stuck, one saved).
+  // and crossings() give at the same point (one outputs_from for both, observation.hpp). The
+  // runner hands dx and z to the next step (its first stage, and the crossings at its start:
+  // two evaluations while stuck, one saved).
   void observe(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx, double* z) const;
 
   EnergyAudit audit(const State& x0, const State& x) const;
@@ -155,7 +157,11 @@ class PsdPlant {
   double kinetic_energy_J(const State& x) const;
   void sense_from(const Eval& e, const State& x, const Modes& m, Sensors& s) const;
   void derivatives_from(const Eval& e, const State& x, State& dx) const;
+  template <OutputSet kSet>
   void outputs_from(const Eval& e, double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const;
+  unsigned faults(const Eval& e, const State& x) const;
+  // crossing 0 while stuck: the break-away threshold minus the force the road holds
+  static double stuck_crossing(const Eval& e);
 
   PsdParams p_;
   MapIce ice_;

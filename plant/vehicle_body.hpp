@@ -72,8 +72,9 @@ class VehicleBody {
     return unmet_braking_Nm > 0.0 ? brake_gain_ * unmet_braking_Nm : 0.0;
   }
   double brake_gain_N_per_Nm() const { return brake_gain_; }
-  // d/dt of the body's states, written at dx[kDistance..kBrakeJ].
-  void derivatives(double speed_m_s, const Forces& f, double brake_N, double* dx) const {
+  // d/dt of the body's states, written at dx[kDistance..kBrakeJ]. Always inlined: it runs in
+  // every integrator stage (a plant's derivatives() inlined into its RK4 step kept it out of line).
+  [[gnu::always_inline]] void derivatives(double speed_m_s, const Forces& f, double brake_N, double* dx) const {
     const double speed_abs = std::abs(speed_m_s);
     dx[kDistance] = speed_m_s;
     dx[kAltitude] = f.grade_rad == 0.0 ? 0.0 : speed_m_s * std::sin(f.grade_rad);

@@ -1,10 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// The plants' observation (solvers/plant.hpp, PlantWithObservation): at every grid point of
-// a whole cycle, with the built-in ECU closing the loop, observe() gives bit for bit what
-// outputs() gives on the fields the runner reads at every step (those kMetrics names and
-// fault), what derivatives() gives for dx/dt and what crossings() gives for z, and leaves
-// every other output as it was. The runner computes the full outputs only for recorded rows
-// and hands dx and z to the next step, so this is what keeps its trajectories unchanged.
+// The plants' observation (solvers/plant.hpp, PlantWithObservation), one typed test for every
+// plant of plant::ObservedPlants (plant/observation.hpp): at every grid point of a whole
+// cycle, with the built-in ECU closing the loop, observe() gives bit for bit what outputs()
+// gives on the fields the runner reads at every step (those kMetrics names, and fault), what
+// derivatives() gives for dx/dt and what crossings() gives for z, and leaves every other output
+// as it was. The runner computes the full outputs only for recorded rows and hands dx and z to
+// the next step, so this is what keeps its trajectories unchanged.
+// A plant's observe() asserts that the plant is in ObservedPlants, and a listed plant without
+// a Case below does not compile: a new plant with observe() cannot be left out.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -14,12 +17,14 @@
 #include <cstring>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "ecu/ev_follower.hpp"
 #include "ecu/psd_ecu.hpp"
 #include "hil/run/runner.hpp"
 #include "plant/bev_plant.hpp"
 #include "plant/ev_machine_plant.hpp"
+#include "plant/observation.hpp"
 #include "plant/psd_plant.hpp"
 #include "solvers/integrators.hpp"
 #include "test_plants.hpp"
@@ -27,10 +32,59 @@
 namespace ehpt::plant {
 namespace {
 
-static_assert(solvers::PlantWithObservation<BevPlant>);
-static_assert(solvers::PlantWithObservation<PsdPlant>);
-static_assert(solvers::PlantWithObservation<EvPmPlant>);
-static_assert(solvers::PlantWithObservation<EvAmPlant>);
+// What a plant's run looks like: its scenario, its built-in ECU, and how much of each regime
+// (standstill, driving, engine on and off) the cycle must visit for the comparison to mean
+// something. No primary definition: every plant of ObservedPlants needs one.
+template <class Plant>
+struct Case;
+
+template <>
+struct Case<BevPlant> {
+  static constexpr const char* kName = "MapEvOnNedc";
+  static constexpr const char* kScenario = "scenarios/ev_nedc.toml";
+  static constexpr std::int64_t kMinStuck = 100000, kMinMoving = 500000, kMinEachEngineState = 0;
+  static ecu::EvFollower ecu(const hil::Scenario&) { return {}; }
+};
+template <>
+struct Case<EvPmPlant> {
+  static constexpr const char* kName = "EvPmOnNedc";
+  static constexpr const char* kScenario = "scenarios/evpm_nedc.toml";
+  static constexpr std::int64_t kMinStuck = 100000, kMinMoving = 500000, kMinEachEngineState = 0;
+  static ecu::EvFollower ecu(const hil::Scenario&) { return {}; }
+};
+template <>
+struct Case<EvAmPlant> {
+  static constexpr const char* kName = "EvAmOnSort1";
+  static constexpr const char* kScenario = "scenarios/evam_sort1.toml";
+  static constexpr std::int64_t kMinStuck = 1000, kMinMoving = 50000, kMinEachEngineState = 0;
+  static ecu::EvFollower ecu(const hil::Scenario&) { return {}; }
+};
+template <>
+struct Case<PsdPlant> {
+  static constexpr const char* kName = "Psecu2OnNedc";
+  static constexpr const char* kScenario = "scenarios/psecu2_nedc.toml";
+  static constexpr std::int64_t kMinStuck = 100000, kMinMoving = 500000, kMinEachEngineState = 100000;
+  static ecu::PsdEcu ecu(const hil::Scenario& sc) {
+    const auto& p = sc.ecu.get<ecu::PsdEcuParams>();
+    return ecu::PsdEcu(p, p.period_s);
+  }
+};
+
+template <class List>
+struct GtestTypes;
+template <class... Plants>
+struct GtestTypes<PlantList<Plants...>> {
+  static_assert((solvers::PlantWithObservation<Plants> && ...));
+  static_assert(((Case<Plants>::kMinStuck > 0) && ...));  // instantiates every Case
+  using type = ::testing::Types<Plants...>;
+};
+
+struct CaseName {
+  template <class Plant>
+  static std::string GetName(int) {
+    return Case<Plant>::kName;
+  }
+};
 
 bool same_bits(double a, double b) { return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b); }
 
@@ -105,69 +159,44 @@ Seen compare_over_run(const Plant& plant, Ecu& ecu, std::int64_t steps, std::int
   return seen;
 }
 
-TEST(Observation, MapEvOnNedcEqualsTheOutputsAtEveryGridPoint) {
-  const hil::Scenario sc = test::load(test::source_path("scenarios/ev_nedc.toml"));
-  const BevPlant plant(sc.plant.get<BevParams>());
-  ecu::EvFollower follower;
-  const Seen seen = compare_over_run(plant, follower, sc.solver.steps, sc.solver.ecu_ratio);
-  EXPECT_EQ(seen.mismatches, 0);
-  EXPECT_EQ(seen.points, sc.solver.steps + 1);
-  EXPECT_GT(seen.stuck, 100000);  // standstills (the stuck crossing) and driving both met
-  EXPECT_GT(seen.moving, 500000);
-}
+template <class Plant>
+class Observation : public ::testing::Test {};
+TYPED_TEST_SUITE(Observation, GtestTypes<ObservedPlants>::type, CaseName);
 
-TEST(Observation, Psecu2OnNedcEqualsTheOutputsAtEveryGridPoint) {
-  const hil::Scenario sc = test::load(test::source_path("scenarios/psecu2_nedc.toml"));
-  const PsdPlant plant(sc.plant.get<PsdParams>());
-  const auto& ecu_params = sc.ecu.get<ecu::PsdEcuParams>();
-  ecu::PsdEcu ecu(ecu_params, ecu_params.period_s);
+TYPED_TEST(Observation, EqualsTheOutputsAtEveryGridPointOfItsCycle) {
+  using Plant = TypeParam;
+  using C = Case<Plant>;
+  const hil::Scenario sc = test::load(test::source_path(C::kScenario));
+  const Plant plant(sc.plant.get<typename Plant::Params>());
+  auto ecu = C::ecu(sc);
   const Seen seen = compare_over_run(plant, ecu, sc.solver.steps, sc.solver.ecu_ratio);
   EXPECT_EQ(seen.mismatches, 0);
   EXPECT_EQ(seen.points, sc.solver.steps + 1);
-  EXPECT_GT(seen.stuck, 100000);
-  EXPECT_GT(seen.moving, 500000);
-  EXPECT_GT(seen.engine_on, 100000);  // engine on and off both met
-  EXPECT_GT(seen.points - seen.engine_on, 100000);
-}
-
-TEST(Observation, EvPmOnNedcEqualsTheOutputsAtEveryGridPoint) {
-  const hil::Scenario sc = test::load(test::source_path("scenarios/evpm_nedc.toml"));
-  const EvPmPlant plant(sc.plant.get<EvPmParams>());
-  ecu::EvFollower follower;
-  const Seen seen = compare_over_run(plant, follower, sc.solver.steps, sc.solver.ecu_ratio);
-  EXPECT_EQ(seen.mismatches, 0);
-  EXPECT_EQ(seen.points, sc.solver.steps + 1);
-  EXPECT_GT(seen.stuck, 100000);
-  EXPECT_GT(seen.moving, 500000);
-}
-
-TEST(Observation, EvAmOnSort1EqualsTheOutputsAtEveryGridPoint) {
-  const hil::Scenario sc = test::load(test::source_path("scenarios/evam_sort1.toml"));
-  const EvAmPlant plant(sc.plant.get<EvAmParams>());
-  ecu::EvFollower follower;
-  const Seen seen = compare_over_run(plant, follower, sc.solver.steps, sc.solver.ecu_ratio);
-  EXPECT_EQ(seen.mismatches, 0);
-  EXPECT_EQ(seen.points, sc.solver.steps + 1);
-  EXPECT_GT(seen.stuck, 1000);
-  EXPECT_GT(seen.moving, 50000);
+  EXPECT_GT(seen.stuck, C::kMinStuck);  // standstills (the stuck crossing) and driving both met
+  EXPECT_GT(seen.moving, C::kMinMoving);
+  if (Plant::kMetrics.engine_on != nullptr) {  // engine on and off both met
+    EXPECT_GT(seen.engine_on, C::kMinEachEngineState);
+    EXPECT_GT(seen.points - seen.engine_on, C::kMinEachEngineState);
+  }
 }
 
 // The fault bits come from the observation at every step the runner does not record: a state
 // that is not finite, and a SOC outside its window, give the same bits as the outputs.
-TEST(Observation, FaultBitsEqualTheOutputs) {
-  const hil::Scenario sc = test::load(test::source_path("scenarios/psecu2_nedc.toml"));
-  PsdParams p = sc.plant.get<PsdParams>();
-  p.battery.soc_max = 0.59;  // starts at 0.6: outside the window
-  const PsdPlant plant(p);
-  PsdPlant::State x = plant.initial_state();
-  const PsdPlant::Modes m = plant.initial_modes(x);
-  const msgs::PsdCommand u{};
+TYPED_TEST(Observation, FaultBitsEqualTheOutputs) {
+  using Plant = TypeParam;
+  const hil::Scenario sc = test::load(test::source_path(Case<Plant>::kScenario));
+  typename Plant::Params p = sc.plant.get<typename Plant::Params>();
+  p.battery.soc_max = p.battery.soc_initial - 0.01;  // starts outside the window
+  const Plant plant(p);
+  typename Plant::State x = plant.initial_state();
+  const typename Plant::Modes m = plant.initial_modes(x);
+  const typename Plant::Inputs u{};
   const double inf = std::numeric_limits<double>::infinity();
   for (const double bad : {0.0, std::nan(""), inf, -inf}) {
-    x[PsdPlant::kFuelKg] = bad;  // a state no derivative reads: only the fault check sees it
-    PsdPlant::Outputs full, obs;
-    PsdPlant::State dx;
-    double z[PsdPlant::kNumCrossings];
+    x[Plant::kAuditOnlyStates.back()] = bad;  // a state no derivative reads: only the fault check sees it
+    typename Plant::Outputs full, obs;
+    typename Plant::State dx;
+    double z[Plant::kNumCrossings];
     plant.outputs(1.0, x, m, u, full);
     plant.observe(1.0, x, m, u, obs, dx, z);
     EXPECT_TRUE(same_bits(obs.fault, full.fault)) << bad;
@@ -193,7 +222,7 @@ void expect_all_finite_is_eigens(Vector x) {
   }
 }
 
-TEST(Observation, AllFiniteIsEigensAllFinite) {
+TEST(ObservationAllFinite, IsEigensAllFinite) {
   expect_all_finite_is_eigens(Eigen::Matrix<double, 7, 1>{});
   expect_all_finite_is_eigens(PsdPlant::State{});
   expect_all_finite_is_eigens(BevPlant::State{});
