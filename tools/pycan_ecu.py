@@ -21,7 +21,13 @@ import can
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 from ehpt_dbc import Dbc  # noqa: E402
 
-DBC_PATH = pathlib.Path(__file__).resolve().parent.parent / "io" / "can" / "ehpt.dbc"
+_HERE = pathlib.Path(__file__).resolve().parent
+# the source tree's (tools/ -> io/can/), else the installed package's (this file is then
+# <prefix>/share/doc/ehpt/examples/pycan_ecu.py, the DBC <prefix>/share/ehpt/can/ehpt.dbc)
+_DBC_CANDIDATES = [_HERE.parent / "io" / "can" / "ehpt.dbc"]
+if len(_HERE.parents) > 2:
+    _DBC_CANDIDATES.append(_HERE.parents[2] / "ehpt" / "can" / "ehpt.dbc")
+DBC_PATH = next((p for p in _DBC_CANDIDATES if p.is_file()), _DBC_CANDIDATES[0])
 SENSOR_FRAMES = {"ev": ["EvSensors1", "EvSensors2", "EvSensors3"],
                  "psd": [f"PsdSensors{i}" for i in range(1, 7)]}
 

@@ -9,26 +9,35 @@
 #     callback, reproduces `ehpt run ev_nedc`; with a torque limit it does not;
 #  3. the installed Python module (if built) finds the installed scenarios;
 #  4. cpack builds the Debian packages; dpkg-deb --info shows their dependencies, dpkg -x
-#     unpacks ehpt_<version>_amd64.deb and its ehpt runs a scenario; apt-get resolves the
-#     package's dependencies (a simulation: nothing is installed on this machine).
-# usage: install_test.sh SOURCE_DIR BUILD_DIR VERSION
+#     unpacks ehpt_<version>-<revision>_amd64.deb and its ehpt runs a scenario; apt-get resolves the
+#     package's dependencies (a simulation: nothing is installed on this machine);
+#  5. each package (docs/packaging.md): lintian reports no error (all its output printed),
+#     it carries packaging/copyright and a changelog.Debian.gz, an extended description;
+#     ehpt has the man page (man -l renders it without a warning), a stripped ehpt, the
+#     Suggests, the example ECUs (the CAN one finds the installed DBC); ehpt-dev has the
+#     static libraries and the CMake package under the multiarch folder only; python3-ehpt a
+#     stripped module.
+# usage: install_test.sh SOURCE_DIR BUILD_DIR VERSION DEB_VERSION (0.1.0 and 0.1.0-1)
 set -euo pipefail
-src="$1" build="$2" version="$3"
+src="$1" build="$2" version="$3" debversion="$4"
 tmp="$(mktemp -d /tmp/ehpt-install-test.XXXXXX)"
 trap 'rm -rf "$tmp"' EXIT  # made above by this script, nothing else
 fail() { echo "FAIL: $*" >&2; exit 1; }
 prefix="$tmp/prefix"
 mkdir -p "$tmp/elsewhere" "$tmp/empty"
+multiarch="$(dpkg-architecture -qDEB_HOST_MULTIARCH)"  # x86_64-linux-gnu
 
 echo "== 1. cmake --install --prefix $prefix"
 cmake --install "$build" --prefix "$prefix" >"$tmp/install.log"
 for f in bin/ehpt libexec/ehpt/plot.py share/ehpt/scenarios/psecu2_nedc.toml share/ehpt/vehicles/psecu2.toml \
          share/ehpt/data/cycles/cycle_nedc.csv share/ehpt/campaigns/psecu2_calibration.toml share/ehpt/can/ehpt.dbc \
          share/ehpt/lcm/psd_sensors_t.lcm include/ehpt/hil/run/simulation.hpp include/ehpt/plant/psd_plant.hpp \
-         include/ehpt/ehpt_lcm/psd_sensors_t.hpp lib/libehpt_hil.a lib/cmake/ehpt/ehptConfig.cmake \
-         lib/cmake/ehpt/ehptTargets.cmake; do
+         include/ehpt/ehpt_lcm/psd_sensors_t.hpp "lib/$multiarch/libehpt_hil.a" "lib/$multiarch/cmake/ehpt/ehptConfig.cmake" \
+         "lib/$multiarch/cmake/ehpt/ehptTargets.cmake" share/man/man1/ehpt.1.gz share/doc/ehpt/copyright \
+         share/doc/ehpt/changelog.Debian.gz share/doc/ehpt/examples/pycan_ecu.py share/doc/ehpt/examples/embed/main.cpp; do
   [ -e "$prefix/$f" ] || fail "the install has no $f"
 done
+! ls "$prefix"/lib/*.a >/dev/null 2>&1 || fail "static libraries outside lib/$multiarch: $(ls "$prefix"/lib/*.a)"
 ehpt="$prefix/bin/ehpt"
 cd "$tmp/elsewhere"
 "$ehpt" --version | tee "$tmp/version.txt"
@@ -192,15 +201,15 @@ fi
 
 echo "== 4. cpack -G DEB"
 (cd "$build" && cpack -G DEB -B "$tmp/pkg" >"$tmp/cpack.log") || { cat "$tmp/cpack.log"; fail "cpack failed"; }
-deb="$tmp/pkg/ehpt_${version}_amd64.deb"
-[ -f "$deb" ] || { ls "$tmp/pkg"; fail "no ehpt_${version}_amd64.deb"; }
-[ -f "$tmp/pkg/ehpt-dev_${version}_amd64.deb" ] || fail "no ehpt-dev_${version}_amd64.deb"
+deb="$tmp/pkg/ehpt_${debversion}_amd64.deb"
+[ -f "$deb" ] || { ls "$tmp/pkg"; fail "no ehpt_${debversion}_amd64.deb"; }
+[ -f "$tmp/pkg/ehpt-dev_${debversion}_amd64.deb" ] || fail "no ehpt-dev_${debversion}_amd64.deb"
 dpkg-deb --info "$deb" | tee "$tmp/info.txt"
 depends="$(dpkg-deb --field "$deb" Depends)"
 for d in libc6 libstdc++6 liblcm1 python3-matplotlib; do
   grep -q "$d" <<<"$depends" || fail "Depends lacks $d: $depends"
 done
-dpkg-deb --info "$tmp/pkg/ehpt-dev_${version}_amd64.deb" | grep -E "Package|Depends"
+dpkg-deb --info "$tmp/pkg/ehpt-dev_${debversion}_amd64.deb" | grep -E "Package|Depends"
 dpkg -x "$deb" "$tmp/root"
 [ ! -e "$tmp/root/usr/include" ] || fail "the runtime package holds headers"
 cd "$tmp/elsewhere"
@@ -212,11 +221,11 @@ assert all(i["path"].startswith(sys.argv[2]) for i in p["inputs"]), p["inputs"]
 assert p["overrides"] == ["solver.duration_s=60"], p["overrides"]
 EOF
 if ls "$pymod_dir"/ehpt*.so >/dev/null 2>&1; then
-  pydeb="$tmp/pkg/python3-ehpt_${version}_amd64.deb"
-  [ -f "$pydeb" ] || fail "no python3-ehpt_${version}_amd64.deb"
+  pydeb="$tmp/pkg/python3-ehpt_${debversion}_amd64.deb"
+  [ -f "$pydeb" ] || fail "no python3-ehpt_${debversion}_amd64.deb"
   pydepends="$(dpkg-deb --field "$pydeb" Depends)"
   echo "python3-ehpt Depends: $pydepends"
-  grep -q "ehpt (= $version)" <<<"$pydepends" && grep -q "python3-numpy" <<<"$pydepends" ||
+  grep -q "ehpt (= $debversion)" <<<"$pydepends" && grep -q "python3-numpy" <<<"$pydepends" ||
     fail "python3-ehpt's Depends lacks ehpt or numpy: $pydepends"
   dpkg -x "$pydeb" "$tmp/root"
   "${hidden[@]}" env PYTHONPATH="$tmp/root/usr/lib/python3/dist-packages" /usr/bin/python3 -c '
@@ -230,4 +239,75 @@ if [ "$(id -u)" -eq 0 ]; then
   apt-get install -s "$deb" >"$tmp/apt.log" 2>&1 || { cat "$tmp/apt.log"; fail "apt cannot resolve the package's dependencies"; }
   grep -E "^Inst ehpt " "$tmp/apt.log" || fail "apt would not install ehpt"
 fi
-echo "install, embed, Python and Debian package: ok"
+echo "== 5. lintian and the contents of each package"
+for tool in lintian man file; do
+  command -v "$tool" >/dev/null || fail "no $tool here (tools/setup.sh installs it)"
+done
+packages=(ehpt ehpt-dev)
+ls "$pymod_dir"/ehpt*.so >/dev/null 2>&1 && packages+=(python3-ehpt)
+for p in "${packages[@]}"; do
+  d="$tmp/pkg/${p}_${debversion}_amd64.deb"
+  echo "-- lintian $p"
+  # every tag printed (info and pedantic too); an E: line, or lintian failing, fails the test
+  rc=0; lintian --display-info --pedantic --tag-display-limit 0 "$d" >"$tmp/lintian-$p.txt" 2>&1 || rc=$?
+  cat "$tmp/lintian-$p.txt"
+  ! grep -q "^E: " "$tmp/lintian-$p.txt" || fail "lintian reports errors for $p (above)"
+  [ "$rc" -eq 0 ] || fail "lintian failed on $p (rc $rc, above)"
+  dpkg-deb --contents "$d" | awk '{print $NF}' >"$tmp/contents-$p.txt"
+  for f in "./usr/share/doc/$p/copyright" "./usr/share/doc/$p/changelog.Debian.gz"; do
+    grep -qxF "$f" "$tmp/contents-$p.txt" || fail "$p has no $f"
+  done
+  dpkg-deb --fsys-tarfile "$d" | tar -xO "./usr/share/doc/$p/copyright" | cmp - "$src/packaging/copyright" ||
+    fail "$p's copyright is not packaging/copyright"
+  dpkg-deb --fsys-tarfile "$d" | tar -xO "./usr/share/doc/$p/changelog.Debian.gz" | gzip -dc |
+    head -1 | grep -q "^ehpt ($debversion) " || fail "$p's changelog.Debian.gz does not start with version $debversion"
+  # a synopsis and an extended description of at least two lines
+  [ "$(dpkg-deb --field "$d" Description | wc -l)" -ge 3 ] || fail "$p has no extended description: $(dpkg-deb --field "$d" Description)"
+done
+suggests="$(dpkg-deb --field "$deb" Suggests)"
+echo "ehpt Suggests: $suggests"
+for s in rt-tests can-utils python3-can liblcm-bin; do
+  grep -qw -- "$s" <<<"$suggests" || fail "ehpt's Suggests lacks $s: $suggests"
+done
+# the man page, rendered as man shows it: no groff warning, the help's commands and our sections
+grep -qxF ./usr/share/man/man1/ehpt.1.gz "$tmp/contents-ehpt.txt" || fail "ehpt has no man page"
+MANWIDTH=80 man --warnings -l "$tmp/root/usr/share/man/man1/ehpt.1.gz" >"$tmp/man.txt" 2>"$tmp/man.err" ||
+  { cat "$tmp/man.err"; fail "man -l cannot render ehpt.1.gz"; }
+[ ! -s "$tmp/man.err" ] || { cat "$tmp/man.err"; fail "man -l warns about ehpt.1.gz"; }
+for want in "^NAME" "ehpt - electric and hybrid power-train plant models" "^SYNOPSIS" "^DESCRIPTION" \
+            "^COMMANDS" "^EXIT STATUS" "^FILES" "/usr/share/ehpt/scenarios/" "^ENVIRONMENT" "EHPT_SCENARIOS" \
+            "^EXAMPLES" "ehpt run ev_nedc"; do
+  grep -q -- "$want" "$tmp/man.txt" || { cat "$tmp/man.txt"; fail "the rendered man page has no '$want'"; }
+done
+# the page's commands (packaging/ehpt.h2m) are exactly those of `ehpt --help`
+"$tmp/root/usr/bin/ehpt" --help | sed -n '/^commands:/,/^$/p' | sed -nE 's/^  ([a-z]+)( [A-Z_]+)? .*/\1/p' | sort >"$tmp/help-commands.txt"
+sed -n '/^COMMANDS/,/^EXIT STATUS/p' "$tmp/man.txt" | sed -nE 's/^ {7}([a-z]+)( [A-Z_]+)?( .*)?$/\1/p' | sort >"$tmp/man-commands.txt"
+[ "$(wc -l <"$tmp/help-commands.txt")" -ge 9 ] || fail "ehpt --help lists only $(wc -l <"$tmp/help-commands.txt") commands"
+diff "$tmp/help-commands.txt" "$tmp/man-commands.txt" || fail "the man page's commands (>) are not ehpt --help's (<): packaging/ehpt.h2m"
+echo "man ehpt: $(wc -l <"$tmp/man.txt") lines, the $(wc -l <"$tmp/man-commands.txt") commands of ehpt --help"
+# stripped binaries (in the packages; the build tree keeps its symbols)
+file "$tmp/root/usr/bin/ehpt" | tee "$tmp/file.txt"
+grep -q ", stripped" "$tmp/file.txt" || fail "the packaged ehpt is not stripped"
+if [[ " ${packages[*]} " == *" python3-ehpt "* ]]; then
+  file "$tmp/root"/usr/lib/python3/dist-packages/ehpt*.so | tee "$tmp/file.txt"
+  grep -q ", stripped" "$tmp/file.txt" || fail "the packaged Python module is not stripped"
+fi
+# ehpt-dev: the static libraries and the CMake package under the multiarch folder, nothing in /usr/lib itself
+for f in "./usr/lib/$multiarch/libehpt_hil.a" "./usr/lib/$multiarch/libehpt_plant.a" \
+         "./usr/lib/$multiarch/cmake/ehpt/ehptConfig.cmake"; do
+  grep -qxF "$f" "$tmp/contents-ehpt-dev.txt" || fail "ehpt-dev has no $f"
+done
+! grep -E '^\./usr/lib/[^/]+\.a$|^\./usr/lib/cmake/' "$tmp/contents-ehpt-dev.txt" ||
+  fail "ehpt-dev has libraries outside /usr/lib/$multiarch"
+# the example ECUs, as in the source tree
+examples="$tmp/root/usr/share/doc/ehpt/examples"
+for pair in pycan_ecu.py:tools/pycan_ecu.py ehpt_dbc.py:tools/ehpt_dbc.py mbecu2_ecu.py:python/examples/mbecu2_ecu.py \
+            lcm_ecu.cpp:examples/lcm_ecu.cpp embed/CMakeLists.txt:examples/embed/CMakeLists.txt \
+            embed/main.cpp:examples/embed/main.cpp README.md:packaging/examples-README.md; do
+  cmp "$examples/${pair%%:*}" "$src/${pair#*:}" || fail "the packaged example ${pair%%:*} is not ${pair#*:}"
+done
+# the unpacked CAN ECU finds the package's DBC by itself (the source tree hidden), on a virtual bus
+"${hidden[@]}" /usr/bin/python3 "$examples/pycan_ecu.py" --interface virtual --idle-timeout 0.2 >"$tmp/pycan.txt" 2>&1 ||
+  { cat "$tmp/pycan.txt"; fail "the packaged pycan_ecu.py does not start"; }
+grep -q "stopped: idle" "$tmp/pycan.txt" || { cat "$tmp/pycan.txt"; fail "the packaged pycan_ecu.py: $(cat "$tmp/pycan.txt")"; }
+echo "install, embed, Python, Debian packages and lintian: ok"
