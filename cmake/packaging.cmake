@@ -134,7 +134,7 @@ set(CPACK_PACKAGE_CONTACT "ehpt maintainers <maintainers@ehpt.invalid>")
 # Each package's description: its synopsis line, then the extended description (empty lines
 # become Debian's " ." paragraph breaks). No CPACK_PACKAGE_DESCRIPTION_SUMMARY: CPackDeb would
 # put that one line on top of every package's own.
-set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
+set(CPACK_PACKAGING_INSTALL_PREFIX ${EHPT_PACKAGE_PREFIX})  # CMakeLists.txt: scenario.cpp knows it too
 set(CPACK_DEB_COMPONENT_INSTALL ON)
 set(CPACK_COMPONENTS_ALL runtime dev)
 if(EHPT_BUILD_PYTHON)

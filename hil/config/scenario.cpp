@@ -99,12 +99,22 @@ std::string configured(const std::string& relative) {
 }  // namespace
 
 std::string configured_data_dir() {
+  // the configured install's, else the Debian packages' (the same build makes both: an
+  // `cmake --install` into its prefix and, with cpack, the packages for /usr), whichever exists
+  std::string first;
+  for (const char* dir : {
 #if defined(EHPT_INSTALLED_DATA_DIR)
-  const std::string dir = EHPT_INSTALLED_DATA_DIR;
-  return fs::path(dir).is_absolute() ? dir : "";
-#else
-  return "";
+           EHPT_INSTALLED_DATA_DIR,
 #endif
+#if defined(EHPT_PACKAGED_DATA_DIR)
+           EHPT_PACKAGED_DATA_DIR,
+#endif
+           ""}) {
+    if (*dir == '\0' || !fs::path(dir).is_absolute()) continue;
+    if (first.empty()) first = dir;
+    if (is_dir(dir)) return dir;
+  }
+  return first;
 }
 
 std::string scenarios_dir() {
