@@ -146,7 +146,16 @@ class Problem:
       message  what is expected of the value (e.g. "must be in [0, 1]")
     """
 
-    __slots__ = ("text", "where", "file", "line", "key", "column", "value", "message")
+    __slots__ = {
+        "text": "The whole message (str).",
+        "where": "Its location as written: file:line, file (default), --set key=value (str or None).",
+        "file": "The file the value is in (None for an entry of set=).",
+        "line": "The line in file, an int (for cycle= the 0-based index into the arrays), or None.",
+        "key": "The dotted key as the message names it, or None.",
+        "column": "The table column of a table's value (a cycle's time_s or speed_m_s), or None.",
+        "value": "The value as the message writes it (text), or None.",
+        "message": "What is expected of the value (or the whole message when it has no key).",
+    }
 
     def __init__(self, text, where=None, file=None, line=None, key=None, column=None, value=None, message=None):
         """Every part as parsed (ehpt makes these; you read them)."""
@@ -577,7 +586,7 @@ class MessageClass {
           const bool is_bool = py::isinstance<py::bool_>(v);
           bool ok = true;
           if constexpr (std::is_same_v<V, bool>) {
-            ok = is_bool;
+            ok = is_bool || type_name(v) == "bool_";  // numpy.bool_ too
           } else if constexpr (std::is_floating_point_v<V>) {
             ok = !is_bool && (py::isinstance<py::float_>(v) || py::isinstance<py::int_>(v) || py::hasattr(v, "__float__"));
           } else if constexpr (std::is_integral_v<V>) {
@@ -917,8 +926,8 @@ class PySimulation {
     return OptionalInt(family_ == Family::kNone ? py::object(py::none()) : py::cast(sc_.solver.ecu_ratio));
   }
   ParamsDict ecu_params() const { return ParamsDict(ecu_parameters(sc_)); }
-  const std::vector<std::string>& signals() const { return signal_names_; }
-  const std::vector<std::string>& columns() const { return column_names_; }
+  StrList signals() const { return StrList(py::cast(signal_names_)); }
+  StrList columns() const { return StrList(py::cast(column_names_)); }
 
  private:
   // step() and run() release the GIL, so another Python thread could call in while the
