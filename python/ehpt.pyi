@@ -4,7 +4,7 @@
 # parameters, defaults, annotations, the message classes' fields and defaults). Guide: docs/python.md.
 
 import os
-from typing import Any
+from typing import Any, Sequence
 
 import numpy
 import pandas
@@ -35,7 +35,7 @@ class Error(ValueError):
     column: str | None
     value: str | None
     message: str | None
-    def __init__(self, text: str, problems: list[Problem] = ()) -> None: ...
+    def __init__(self, text: str, problems: Sequence[Problem] = ()) -> None: ...
 
 class Stamp:
     time_s: float
