@@ -3,7 +3,10 @@
 // installed ev_nedc scenario without its built-in ECU, and once per ECU period read the
 // sensors, compute the command and write it, then step the plant to the next sample.
 //
-//   embed_ecu [--torque-limit-Nm T] [--scenario PATH]
+//   embed_ecu [--torque-limit-Nm T] [--scenario NAME|PATH]
+//
+// --scenario takes a file or a scenario's name ("ev_nedc"), looked up as `ehpt run` does; the
+// installed library knows its data folder, so a name resolves in this program too.
 //
 // The ECU here is the EV's driver-follower with an optional torque limit. Without a limit its
 // commands are the built-in ECU's, so the run is `ehpt run ev_nedc` bit for bit: the harness
@@ -18,6 +21,7 @@
 #include <vector>
 
 #include "hil/config/config.hpp"
+#include "hil/config/scenario.hpp"
 #include "hil/run/simulation.hpp"
 #include "msgs/ev.hpp"
 
@@ -31,7 +35,7 @@ ehpt::msgs::EvCommand my_ecu(const ehpt::msgs::EvSensors& s, double torque_limit
 }
 
 int usage(const char* why) {
-  std::fprintf(stderr, "error: %s\nusage: embed_ecu [--torque-limit-Nm T] [--scenario PATH]\n", why);
+  std::fprintf(stderr, "error: %s\nusage: embed_ecu [--torque-limit-Nm T] [--scenario NAME|PATH]\n", why);
   return 2;
 }
 
@@ -49,7 +53,12 @@ int main(int argc, char** argv) {
       torque_limit_Nm = std::strtod(v.c_str(), &end);
       if (end == v.c_str() || *end != '\0' || !(torque_limit_Nm > 0.0)) return usage("--torque-limit-Nm must be > 0");
     } else if (a == "--scenario") {
-      scenario = v;
+      std::string reason;
+      scenario = ehpt::hil::resolve_scenario(v, reason);
+      if (scenario.empty()) {
+        std::fprintf(stderr, "error: %s: %s\n", v.c_str(), reason.c_str());
+        return 2;
+      }
     } else {
       return usage(("unknown option " + a).c_str());
     }

@@ -1,10 +1,12 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "hil/config/config.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 
 #include "hil/config/config_reader.hpp"
+#include "hil/config/scenario.hpp"
 #include "hil/config/vehicle_kinds.hpp"
 #include "io/number_format.hpp"
 
@@ -37,6 +39,133 @@ const char* solver_name(SolverKind k) { return k == SolverKind::kRk4 ? "rk4" : "
 
 namespace {
 
+// The longest chain of vehicle files extending each other: deeper is a mistake, not a design.
+constexpr std::size_t kMaxExtends = 16;
+
+// The file a vehicle name or a path names: a name ("psecu2") is a shipped vehicle
+// (resolve_vehicle); a path (with a slash, or ending in .toml) is relative to the folder of the
+// file that gives it (--set: the current folder).
+FileRef vehicle_file_of(const toml::node& n, const std::string& fallback_file, const std::string& field,
+                        bool name_only, Context& ctx) {
+  const std::string where = location(&n, fallback_file);
+  const auto v = n.value_exact<std::string>();
+  if (!v || v->empty()) {
+    ctx.errors.push_back(where + ": " + field + " = " + node_text(n) + ": must be " +
+                         (name_only ? "the name of a shipped vehicle (a non-empty string; see docs/scenarios.md)"
+                                    : "a vehicle's name or a vehicle file (a non-empty string)"));
+    return {};
+  }
+  const bool is_path = v->find('/') != std::string::npos || (v->ends_with(".toml") && !name_only);
+  if (is_path && name_only) {
+    ctx.errors.push_back(where + ": " + field + " = \"" + *v + "\": a name of a shipped vehicle, not a path; name a " +
+                         "file of your own with vehicle_file = \"" + *v + "\"");
+    return {};
+  }
+  if (is_path) {
+    fs::path p(*v);
+    if (p.is_relative() && n.source().path && n.source().path->rfind("--set", 0) != 0) {
+      p = fs::path(*n.source().path).parent_path() / p;
+    }
+    return {p.lexically_normal().string(), *v, where, field};
+  }
+  std::string reason;
+  const std::string found = resolve_vehicle(*v, reason);
+  if (found.empty()) {
+    ctx.errors.push_back(where + ": " + field + " = \"" + *v + "\": " + reason);
+    return {};
+  }
+  return {found, *v, where, field};
+}
+
+// vehicle = "NAME" (a shipped vehicle) or vehicle_file = "PATH", from the highest layer that
+// gives one; both in one layer is an error. A layer's vehicle table ([vehicle.x] overrides) is
+// read later, over the vehicle file.
+FileRef choose_vehicle(const std::vector<Layer>& layers, Reader& sc, const std::string& path, Context& ctx) {
+  sc.known("vehicle");
+  int name_layer = -1, file_layer = -1;
+  for (std::size_t i = 0; i < layers.size(); ++i) {
+    const toml::node* n = layers[i].table->get("vehicle");
+    if (n != nullptr && !n->is_table() && !n->is_string()) {
+      ctx.errors.push_back(location(n, path) + ": vehicle = " + node_text(*n) +
+                           ": must be a shipped vehicle's name (vehicle = \"psecu2\") or a table of overrides "
+                           "([vehicle.battery] ...)");
+    }
+    if (name_layer < 0 && n != nullptr && n->is_string()) name_layer = static_cast<int>(i);
+    if (file_layer < 0 && layers[i].table->get("vehicle_file") != nullptr) file_layer = static_cast<int>(i);
+  }
+  if (name_layer >= 0 && name_layer == file_layer) {
+    const toml::node* n = layers[static_cast<std::size_t>(name_layer)].table->get("vehicle");
+    sc.path("vehicle_file", false);
+    ctx.errors.push_back(location(n, path) + ": vehicle = \"" + *n->value_exact<std::string>() +
+                         "\": give either vehicle (a shipped vehicle's name) or vehicle_file (a path), not both");
+    return {};
+  }
+  if (name_layer >= 0 && (file_layer < 0 || name_layer < file_layer)) {
+    if (file_layer >= 0) sc.known("vehicle_file");  // under the name given by a higher layer
+    const toml::node* n = layers[static_cast<std::size_t>(name_layer)].table->get("vehicle");
+    return vehicle_file_of(*n, path, "vehicle", true, ctx);
+  }
+  if (file_layer < 0) {
+    sc.known("vehicle_file");
+    ctx.errors.push_back(path + ": vehicle: missing (name a shipped vehicle with vehicle = \"NAME\", e.g. \"psecu2\", "
+                                "or a file with vehicle_file = \"PATH\")");
+    return {};
+  }
+  return sc.path("vehicle_file", true);
+}
+
+// Reads the vehicle file named by ref and every file it extends (extends = "NAME" or "PATH"),
+// the file first, its base last. A cycle is an error that names the files; a file may not
+// change the base's kind.
+bool load_vehicle_chain(FileRef ref, std::vector<toml::table>& docs, Context& ctx) {
+  std::vector<std::string> chain;  // canonical paths, for the cycle check
+  std::vector<std::string> shown;  // as read, for messages
+  docs.clear();
+  while (true) {
+    std::error_code ec;
+    const fs::path canonical = fs::weakly_canonical(ref.path, ec);
+    const std::string id = ec ? ref.path : canonical.string();
+    if (std::find(chain.begin(), chain.end(), id) != chain.end()) {
+      std::string loop;
+      for (const std::string& f : shown) loop += f + " -> ";
+      ctx.errors.push_back(ref.where + ": " + ref.field + " = \"" + ref.written + "\": the vehicle files extend each other " +
+                           "in a cycle: " + loop + ref.path);
+      return false;
+    }
+    if (chain.size() >= kMaxExtends) {
+      ctx.errors.push_back(ref.where + ": " + ref.field + " = \"" + ref.written + "\": more than " +
+                           std::to_string(kMaxExtends) + " vehicle files extend each other");
+      return false;
+    }
+    toml::table doc;
+    if (!parse_toml(ref.path, doc, ctx, &ref)) return false;
+    chain.push_back(id);
+    shown.push_back(ref.path);
+    docs.push_back(std::move(doc));
+    const toml::node* ext = docs.back().get("extends");
+    if (ext == nullptr) break;
+    FileRef next = vehicle_file_of(*ext, ref.path, "extends", false, ctx);
+    if (next.empty()) return false;
+    ref = std::move(next);
+  }
+  // the kind comes from the base; a file over it may repeat it, not change it
+  std::string base_kind, base_file;
+  for (std::size_t i = docs.size(); i-- > 0;) {
+    const toml::node* k = docs[i].get("kind");
+    if (k == nullptr || !k->is_string()) continue;
+    const std::string kind = *k->value_exact<std::string>();
+    if (base_kind.empty()) {
+      base_kind = kind;
+      base_file = shown[i];
+    } else if (kind != base_kind) {
+      ctx.errors.push_back(location(k, shown[i]) + ": kind = \"" + kind + "\": differs from kind = \"" + base_kind +
+                           "\" of " + base_file + ", which it extends (a vehicle file keeps its base's kind)");
+      return false;
+    }
+  }
+  return true;
+}
+
 // load_scenario's work; cycle: the cycle as arrays in place of the scenario's file (nullptr: the file)
 bool load(const std::string& path, const std::vector<std::string>& overrides, const CycleArrays* cycle, Scenario& out,
           std::vector<std::string>& errors) {
@@ -55,13 +184,13 @@ bool load(const std::string& path, const std::vector<std::string>& overrides, co
     out.inputs = std::move(ctx.inputs);
     return false;
   }
-  std::vector<const toml::table*> layers;
-  for (auto d = set_docs.rbegin(); d != set_docs.rend(); ++d) layers.push_back(&*d);
-  layers.push_back(&scenario_doc);
+  std::vector<Layer> layers;
+  for (auto d = set_docs.rbegin(); d != set_docs.rend(); ++d) layers.push_back({&*d, false});
+  layers.push_back({&scenario_doc, false});
   Reader sc(layers, "", path, ctx);
 
   out.description = sc.text("description", "");
-  const FileRef vehicle_ref = sc.path("vehicle_file", true);
+  const FileRef vehicle_ref = choose_vehicle(layers, sc, path, ctx);
   FileRef cycle_ref = sc.path("cycle", false);
   if (cycle != nullptr) {
     cycle_ref = FileRef{cycle->name, cycle->name, cycle->name, "cycle"};
@@ -121,20 +250,29 @@ bool load(const std::string& path, const std::vector<std::string>& overrides, co
     r.finish();
   }
 
-  // the vehicle: --set vehicle.*, then the scenario's [vehicle] table, then the vehicle file
-  (void)sc.sub("vehicle");  // read below, as a layer over the vehicle file
+  // the vehicle: --set vehicle.*, then the scenario's [vehicle] table, then the vehicle file and
+  // the files it extends, the base last
   sc.finish();
-  toml::table vehicle_doc;
-  if (vehicle_ref.empty() || !parse_toml(vehicle_ref.path, vehicle_doc, ctx, &vehicle_ref)) {
+  std::vector<toml::table> vehicle_docs;
+  if (vehicle_ref.empty() || !load_vehicle_chain(vehicle_ref, vehicle_docs, ctx)) {
+    ctx.suggest_known_keys();
     errors = ctx.errors;
     out.inputs = std::move(ctx.inputs);
     return false;
   }
-  std::vector<const toml::table*> vlayers;
-  for (auto d = set_docs.rbegin(); d != set_docs.rend(); ++d) vlayers.push_back(d->get_as<toml::table>("vehicle"));
-  vlayers.push_back(scenario_doc.get_as<toml::table>("vehicle"));
-  vlayers.push_back(&vehicle_doc);
-  Reader vr(vlayers, "", out.vehicle_path, ctx);
+  std::vector<Layer> vlayers;
+  for (auto d = set_docs.rbegin(); d != set_docs.rend(); ++d) vlayers.push_back({d->get_as<toml::table>("vehicle"), false});
+  vlayers.push_back({scenario_doc.get_as<toml::table>("vehicle"), false});
+  for (const toml::table& doc : vehicle_docs) vlayers.push_back({&doc, true});
+  for (std::size_t i = 0; i + vehicle_docs.size() < vlayers.size(); ++i) {
+    // only a vehicle file extends another: in a scenario the vehicle is named by vehicle = "..."
+    if (const toml::node* n = vlayers[i].table == nullptr ? nullptr : vlayers[i].table->get("extends")) {
+      ctx.errors.push_back(location(n, path) + ": vehicle.extends: only a vehicle file can extend another; a scenario "
+                                              "names its vehicle with vehicle = \"NAME\" or vehicle_file = \"PATH\"");
+    }
+  }
+  Reader vr(vlayers, "", out.vehicle_path, ctx, "", "vehicle.", true);
+  vr.known("extends");
   vr.text("description", "");
   const std::string kind = vr.text("kind", "");
   out.kind = kind;
@@ -146,6 +284,7 @@ bool load(const std::string& path, const std::vector<std::string>& overrides, co
   } else {
     ctx.error(ctx.where["kind"], "kind", "\"" + kind + "\"", "must be " + kind_names());
   }
+  ctx.suggest_known_keys();
   const bool has_ecu = read.has_ecu;
   const bool duration_unknown = read.length_unknown;
   report_plant_problems(problems, ctx);

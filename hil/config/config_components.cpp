@@ -1,10 +1,47 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "hil/config/config_components.hpp"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
+#include <optional>
 #include <string_view>
 
 namespace ehpt::hil::detail {
+
+namespace {
+
+// Plausibility bands (docs/scenarios.md, "Plausibility warnings"): a value outside is most
+// likely a unit or a typo and gets a warning, never an error. Wide enough for a scooter to a
+// truck; every shipped vehicle is well inside (tests/hil/config_test.cpp checks both).
+struct Band {
+  double lo, hi;
+};
+constexpr Band kMassBand{50.0, 60000.0};             // kg: a light quadricycle .. a 60 t truck
+constexpr Band kWheelRadiusBand{0.1, 1.5};           // m
+constexpr Band kGearRatioBand{0.2, 50.0};            // final drive, machine / wheel speed
+constexpr Band kCellCapacityBand{0.1, 1000.0};       // Ah of one cell
+constexpr Band kCellResistanceBand{1e-5, 1.0};       // Ohm of one cell
+constexpr Band kCellCapacitanceBand{1.0, 1e7};       // F of one cell's RC branch
+constexpr Band kCellsSeriesBand{1.0, 1000.0};        // cells in series (a 1000 V pack of 1.2 V cells: 833)
+constexpr Band kStringsParallelBand{1.0, 1000.0};    // strings in parallel
+constexpr Band kFrontalAreaBand{0.3, 15.0};          // m^2
+constexpr Band kDragCoefficientBand{0.1, 1.5};
+constexpr Band kRollingCoefficientBand{0.001, 0.05};
+constexpr Band kDriveTorqueBand{1.0, 20000.0};       // N m, a drive's (or an engine's) peak torque
+constexpr Band kDrivePowerBand{500.0, 2e6};          // W, a drive's peak power
+constexpr Band kDriveSpeedBand{10.0, 5000.0};        // rad/s, a drive's top speed (48 000 rpm)
+constexpr Band kRotorInertiaBand{1e-4, 50.0};        // kg m^2
+constexpr Band kMachineVoltageBand{5.0, 2000.0};     // V rms, a machine's rated voltage
+constexpr Band kMachineCurrentBand{1.0, 5000.0};     // A rms, a machine's current limit
+
+void plausible_drive_rating(Reader& r, double torque_Nm, double power_W, double speed_rad_s) {
+  r.plausible("torque_max_Nm", torque_Nm, kDriveTorqueBand.lo, kDriveTorqueBand.hi, "N m", "a drive's peak torque");
+  r.plausible("power_max_W", power_W, kDrivePowerBand.lo, kDrivePowerBand.hi, "W", "a drive's peak power");
+  r.plausible("speed_max_rad_s", speed_rad_s, kDriveSpeedBand.lo, kDriveSpeedBand.hi, "rad/s", "a drive's top speed");
+}
+
+}  // namespace
 
 plant::MapDriveParams read_drive(Reader r, Context& ctx) {
   plant::MapDriveParams p;
@@ -34,6 +71,8 @@ plant::MapDriveParams read_drive(Reader r, Context& ctx) {
   }
   if (model != "map" && r.has("efficiency_map")) r.path("efficiency_map", false);  // allowed, unused
   if (model != "formula" && r.has("loss_formula")) r.sub("loss_formula");
+  plausible_drive_rating(r, p.torque_max_Nm, p.power_max_W, p.speed_max_rad_s);
+  r.plausible("inertia_kgm2", p.inertia_kgm2, kRotorInertiaBand.lo, kRotorInertiaBand.hi, "kg m^2", "a rotor's inertia");
   r.finish();
   return p;
 }
@@ -50,6 +89,13 @@ plant::PmDriveParams read_pm_drive(Reader r) {
   p.k_inv_W_per_A = r.number("k_inv_W_per_A", p.k_inv_W_per_A);
   p.inertia_kgm2 = r.required_number("inertia_kgm2");
   p.speed_max_rad_s = r.required_number("speed_max_rad_s");
+  r.plausible("U_max_rms_V", p.U_max_rms_V, kMachineVoltageBand.lo, kMachineVoltageBand.hi, "V rms",
+              "a machine's rated voltage");
+  r.plausible("I_lim_rms_A", p.I_lim_rms_A, kMachineCurrentBand.lo, kMachineCurrentBand.hi, "A rms",
+              "a machine's current limit");
+  r.plausible("speed_max_rad_s", p.speed_max_rad_s, kDriveSpeedBand.lo, kDriveSpeedBand.hi, "rad/s",
+              "a drive's top speed");
+  r.plausible("inertia_kgm2", p.inertia_kgm2, kRotorInertiaBand.lo, kRotorInertiaBand.hi, "kg m^2", "a rotor's inertia");
   r.finish();
   return p;
 }
@@ -67,6 +113,11 @@ plant::AmDriveParams read_am_drive(Reader r) {
   p.w_e_base_rad_s = r.required_number("w_e_base_rad_s");
   p.I_max_rms_A = r.required_number("I_max_rms_A");
   p.k_inv_W_per_A = r.number("k_inv_W_per_A", p.k_inv_W_per_A);
+  r.plausible("U_base_rms_V", p.U_base_rms_V, kMachineVoltageBand.lo, kMachineVoltageBand.hi, "V rms",
+              "a machine's rated voltage");
+  r.plausible("I_max_rms_A", p.I_max_rms_A, kMachineCurrentBand.lo, kMachineCurrentBand.hi, "A rms",
+              "a machine's current limit");
+  r.plausible("inertia_kgm2", p.inertia_kgm2, kRotorInertiaBand.lo, kRotorInertiaBand.hi, "kg m^2", "a rotor's inertia");
   r.finish();
   return p;
 }
@@ -88,6 +139,19 @@ plant::BatteryRcParams read_battery(Reader r) {
   // a pack of more than 100 000 cells in either direction is a typo, not a battery
   p.cells_series = r.small_integer("cells_series", p.cells_series, 1, 100000);
   p.strings_parallel = r.small_integer("strings_parallel", p.strings_parallel, 1, 100000);
+  r.plausible("cell_capacity_Ah", p.cell_capacity_Ah, kCellCapacityBand.lo, kCellCapacityBand.hi, "Ah",
+              "a cell's capacity");
+  for (const char* key : {"r0_cell_Ohm", "r1_cell_Ohm"}) {
+    const std::optional<double>& v = std::string_view(key) == "r0_cell_Ohm" ? p.r0_cell_Ohm : p.r1_cell_Ohm;
+    if (v) r.plausible(key, *v, kCellResistanceBand.lo, kCellResistanceBand.hi, "Ohm", "a cell's resistance");
+  }
+  if (p.c1_cell_F) {
+    r.plausible("c1_cell_F", *p.c1_cell_F, kCellCapacitanceBand.lo, kCellCapacitanceBand.hi, "F",
+                "a cell's RC capacitance");
+  }
+  r.plausible("cells_series", p.cells_series, kCellsSeriesBand.lo, kCellsSeriesBand.hi, "", "cells in series");
+  r.plausible("strings_parallel", p.strings_parallel, kStringsParallelBand.lo, kStringsParallelBand.hi, "",
+              "strings in parallel");
   r.finish();
   return p;
 }
@@ -128,6 +192,14 @@ plant::RoadLoadParams read_road(Reader r, Context& ctx) {
     for (std::string_view key : kCoefficientKeys) r.find(key);
     for (std::string_view key : kCoastDownKeys) r.find(key);
   }
+  if (p.form == plant::RoadLoadForm::kCoefficients) {
+    r.plausible("frontal_area_m2", p.frontal_area_m2, kFrontalAreaBand.lo, kFrontalAreaBand.hi, "m^2",
+                "a vehicle's frontal area");
+    r.plausible("drag_coefficient", p.drag_coefficient, kDragCoefficientBand.lo, kDragCoefficientBand.hi, "",
+                "a drag coefficient");
+    r.plausible("rolling_coefficient", p.rolling_coefficient, kRollingCoefficientBand.lo, kRollingCoefficientBand.hi,
+                "", "a rolling resistance coefficient");
+  }
   const FileRef slope = r.path("slope_table", false);
   if (!slope.empty()) p.slope_rad = load_curve(slope, r.field("slope"), ctx);
   r.finish();
@@ -140,6 +212,9 @@ plant::VehicleBodyParams read_body(Reader r) {
   b.wheel_radius_m = r.required_number("wheel_radius_m");
   b.gear_ratio = r.required_number("gear_ratio");
   b.speed_initial_m_s = r.number("speed_initial_m_s", 0.0);
+  r.plausible("mass_kg", b.mass_kg, kMassBand.lo, kMassBand.hi, "kg", "a vehicle's mass");
+  r.plausible("wheel_radius_m", b.wheel_radius_m, kWheelRadiusBand.lo, kWheelRadiusBand.hi, "m", "a wheel's radius");
+  r.plausible("gear_ratio", b.gear_ratio, kGearRatioBand.lo, kGearRatioBand.hi, "", "a final drive's gear ratio");
   r.finish();
   return b;
 }
@@ -180,6 +255,19 @@ plant::MapIceParams read_ice(Reader r, Context& ctx) {
   p.on_off = r.flag("on_off", false);
   const FileRef curve = r.path("torque_max_table", true);
   if (!curve.empty()) p.torque_max_Nm = load_curve(curve, r.field("torque_max"), ctx);
+  r.plausible("inertia_kgm2", p.inertia_kgm2, kRotorInertiaBand.lo, kRotorInertiaBand.hi, "kg m^2",
+              "an engine's inertia");
+  if (!p.torque_max_Nm.empty()) {
+    // the engine's rating: the peak of its torque curve
+    double peak_Nm = 0.0;
+    for (const double t : p.torque_max_Nm.y()) peak_Nm = std::max(peak_Nm, t);
+    if (std::isfinite(peak_Nm) && peak_Nm > 0.0 && (peak_Nm < kDriveTorqueBand.lo || peak_Nm > kDriveTorqueBand.hi)) {
+      ctx.warn(curve.path, r.field("torque_max"), plant::number_text(peak_Nm) + " N m (its peak)",
+               "outside the plausible band [" + plant::number_text(kDriveTorqueBand.lo) + ", " +
+                   plant::number_text(kDriveTorqueBand.hi) + "] N m of an engine's peak torque (a unit or a typo? " +
+                   "it runs as given)");
+    }
+  }
   const FileRef sfc = r.path("sfc_map", true);
   if (!sfc.empty()) p.sfc_g_kWh = load_map(sfc, r.field("sfc_map"), ctx);
   r.finish();

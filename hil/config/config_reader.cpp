@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "hil/config/scenario.hpp"
 #include "hil/config/toml_guard.hpp"
 #include "io/number_format.hpp"
 #include "io/sha256.hpp"
@@ -29,6 +30,85 @@ std::string location(const toml::node* n, const std::string& fallback) {
   const std::string& p = *n->source().path;
   if (p.rfind("--set", 0) == 0) return p;
   return p + ":" + std::to_string(n->source().begin.line);
+}
+
+namespace {
+
+std::string_view leaf_of(std::string_view path) {
+  const auto dot = path.rfind('.');
+  return dot == std::string_view::npos ? path : path.substr(dot + 1);
+}
+std::string_view parent_of(std::string_view path) {
+  const auto dot = path.rfind('.');
+  return dot == std::string_view::npos ? std::string_view() : path.substr(0, dot);
+}
+std::vector<std::string> tokens_of(std::string_view leaf) {
+  std::vector<std::string> out;
+  std::string t;
+  for (const char c : leaf) {
+    if (c == '_') {
+      if (!t.empty()) out.push_back(t);
+      t.clear();
+    } else {
+      t += (c >= 'A' && c <= 'Z') ? static_cast<char>(c - 'A' + 'a') : c;
+    }
+  }
+  if (!t.empty()) out.push_back(t);
+  return out;
+}
+bool ends_with_part(std::string_view path, std::string_view tail) {
+  return path.size() > tail.size() && path.ends_with(tail) && path[path.size() - tail.size() - 1] == '.';
+}
+
+// How far the unknown key is from a known one (lower is closer; -1: not a near miss).
+int key_distance(const std::string& unknown, const std::string& known) {
+  if (known == unknown) return -1;
+  // the right key at the wrong depth: vehicle.mass_kg for vehicle.vehicle.mass_kg, or a
+  // scenario key inside [vehicle]
+  if (ends_with_part(known, unknown) || ends_with_part(unknown, known)) return 1;
+  const std::string_view a = leaf_of(unknown), b = leaf_of(known);
+  const int elsewhere = parent_of(unknown) == parent_of(known) ? 0 : 2;
+  const auto d = static_cast<int>(edit_distance(a, b));
+  if (d <= std::max<int>(1, static_cast<int>(a.size()) / 4)) return 1 + d + elsewhere;
+  // every word of the unknown key begins a word of the known one: capacity -> cell_capacity_Ah
+  const std::vector<std::string> ta = tokens_of(a), tb = tokens_of(b);
+  if (ta.empty() || ta.size() > tb.size()) return -1;
+  std::size_t matched = 0;
+  for (const std::string& w : ta) {
+    bool found = false;
+    for (const std::string& v : tb) found = found || (w.size() >= 2 && v.rfind(w, 0) == 0);
+    matched += found ? 1 : 0;
+  }
+  if (matched != ta.size() || tb.size() - ta.size() > 3) return -1;
+  return 3 + static_cast<int>(tb.size() - ta.size()) + elsewhere;
+}
+
+}  // namespace
+
+void Context::suggest_known_keys() {
+  for (const Unknown& u : unknown) {
+    std::string best;
+    int best_d = -1;
+    for (const std::string& k : known) {
+      const int d = key_distance(u.path, k);
+      if (d < 0) continue;
+      // a tie goes to the shorter key, then the first in order
+      if (best_d < 0 || d < best_d || (d == best_d && k.size() < best.size())) {
+        best_d = d;
+        best = k;
+      }
+    }
+    if (best.empty() || u.error >= errors.size()) continue;
+    std::string hint;
+    if (!u.vehicle_file) {
+      hint = "`" + best + "`";
+    } else if (best.rfind("vehicle.", 0) == 0) {
+      hint = "`" + best.substr(8) + "`";  // a vehicle file writes its keys without "vehicle."
+    } else {
+      hint = "`" + best + "` (a key of the scenario, not of the vehicle file)";
+    }
+    errors[u.error] += "; did you mean " + hint + "?";
+  }
 }
 
 // ref: the key that names the file (the vehicle file), so that a missing file is reported
@@ -251,7 +331,7 @@ void report_plant_problems(const Problems& problems, Context& ctx, std::vector<s
     bool reported = false;
     for (const std::string& failed : ctx.failed_tables) reported = reported || pr.field.rfind(failed, 0) == 0;
     if (reported) continue;
-    std::string loc, field = pr.field, value = pr.value;
+    std::string loc, field = ctx.display(pr.field), raw_field = pr.field, value = pr.value;
     if (const auto t = ctx.tables.find(pr.field); t != ctx.tables.end()) {
       const TableSource& src = t->second;
       loc = src.path;
@@ -261,6 +341,7 @@ void report_plant_problems(const Problems& problems, Context& ctx, std::vector<s
         if (pr.column >= 0 && static_cast<std::size_t>(pr.column) < src.columns.size()) {
           const auto col = static_cast<std::size_t>(pr.column);
           field += ", column " + src.columns[col];
+          raw_field += ", column " + src.columns[col];
           value = src.text[col][row];
         }
       }
@@ -272,7 +353,8 @@ void report_plant_problems(const Problems& problems, Context& ctx, std::vector<s
     if (sink != nullptr) {
       sink->push_back(loc + ": " + field + " = " + value + ": " + pr.expected);
     } else {
-      ctx.error(loc, field, value, pr.expected);
+      ctx.errors.push_back(loc + ": " + field + " = " + value + ": " + pr.expected);
+      ctx.reported.insert(raw_field);
     }
   }
 }

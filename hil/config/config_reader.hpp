@@ -4,6 +4,7 @@
 // readers (hil/config/config_components.hpp) and each vehicle kind's reader (hil/kinds/registry.cpp).
 // Start-up only. Every problem is collected with the file and line its value came from.
 
+#include <cmath>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -56,6 +57,23 @@ struct Context {
   std::set<std::string> failed_tables;  // fields whose file could not be read: no follow-on problems
 
   std::set<std::string> reported;  // fields with a problem already: validate() need not repeat it
+  // field -> the key as the user wrote it: "vehicle.battery.x" for --set and a scenario's
+  // [vehicle.battery], "battery.x" for a vehicle file's [battery] (fields are the latter)
+  std::map<std::string, std::string> shown;
+  // every key a reader asked for, as a scenario writes it ("solver.step_s",
+  // "vehicle.battery.cell_capacity_Ah"): what an unknown key is compared with for a hint
+  std::set<std::string> known;
+  // an unknown key: its message (errors[error]) gets a "did you mean" once every table is read
+  struct Unknown {
+    std::size_t error;
+    std::string path;           // as a scenario writes it
+    bool vehicle_file = false;  // written in a vehicle file (without the scenario's "vehicle.")
+  };
+  std::vector<Unknown> unknown;
+  const std::string& display(const std::string& field) const {
+    const auto it = shown.find(field);
+    return it == shown.end() ? field : it->second;
+  }
   const CycleArrays* cycle_arrays = nullptr;  // load_scenario_with_cycle: load_cycle takes these, not a file
   // every file read, in the order read (each once): what the run depends on (hil/config/config.hpp)
   std::vector<InputFile> inputs;
@@ -63,50 +81,77 @@ struct Context {
 
   void error(const std::string& loc, const std::string& field, const std::string& value,
              const std::string& expected) {
-    errors.push_back(loc + ": " + field + (value.empty() ? "" : " = " + value) + ": " + expected);
+    errors.push_back(loc + ": " + display(field) + (value.empty() ? "" : " = " + value) + ": " + expected);
     reported.insert(field);
   }
   void warn(const std::string& loc, const std::string& field, const std::string& value, const std::string& why) {
-    warnings.push_back(loc + ": " + field + (value.empty() ? "" : " = " + value) + ": " + why);
+    warnings.push_back(loc + ": " + display(field) + (value.empty() ? "" : " = " + value) + ": " + why);
   }
+  // Adds "; did you mean `key`?" to each unknown key's message: the closest known key by edit
+  // distance, in the same table or at another depth (vehicle.mass_kg -> vehicle.vehicle.mass_kg).
+  void suggest_known_keys();
   // A file named by ref cannot be read: say so at the key that names it.
   void unreadable(const FileRef& ref, const std::string& reason) {
     error(ref.where, ref.field, "\"" + ref.written + "\"", "cannot read " + ref.path + ": " + reason);
   }
 };
 
+// One table of a layer: vehicle_file tells how its keys are written (a vehicle file's
+// [battery] x is "battery.x"; the same key from --set or a scenario is "vehicle.battery.x").
+struct Layer {
+  const toml::table* table = nullptr;
+  bool vehicle_file = false;
+};
+
 // A view of one table through several layers, highest priority first (--set overrides,
-// the scenario's [vehicle] table, the vehicle file). Unknown keys in any layer are errors.
+// the scenario's [vehicle] table, the vehicle file and the files it extends). Unknown keys in
+// any layer are errors.
 class Reader {
  public:
-  // where: the location of this table (for keys that are missing from it), default the file
-  Reader(std::vector<const toml::table*> layers, std::string prefix, std::string file, Context& ctx,
-         std::string where = "")
+  // where: the location of this table (for keys that are missing from it), default the file;
+  // space: what a scenario writes before this reader's fields ("vehicle." for the vehicle's);
+  // where_in_vehicle_file: whether where is in a vehicle file (how a missing key is named)
+  Reader(std::vector<Layer> layers, std::string prefix, std::string file, Context& ctx, std::string where = "",
+         std::string space = "", bool where_in_vehicle_file = false)
       : layers_(std::move(layers)), prefix_(std::move(prefix)), file_(std::move(file)), ctx_(ctx),
-        where_(where.empty() ? file_ : std::move(where)) {}
+        where_(where.empty() ? file_ : std::move(where)), space_(std::move(space)),
+        where_in_vehicle_file_(where_in_vehicle_file) {}
 
   const std::string& name() const { return prefix_; }
   const std::string& where() const { return where_; }
+  Context& context() { return ctx_; }
 
   std::string field(std::string_view key) const { return prefix_.empty() ? std::string(key) : prefix_ + "." + std::string(key); }
+  // key as the user wrote it in layer (-1: as a missing key of this table is named)
+  std::string written(std::string_view key, int layer) const {
+    const bool in_file = layer < 0 ? where_in_vehicle_file_ : layers_[static_cast<std::size_t>(layer)].vehicle_file;
+    return (in_file ? "" : space_) + field(key);
+  }
+  // A key this reader knows but reads elsewhere (or not at all): not unknown.
+  void known(std::string_view key) {
+    used_.insert(std::string(key));
+    ctx_.known.insert(space_ + field(key));
+  }
 
   const toml::node* find(std::string_view key) {
-    used_.insert(std::string(key));
-    for (const toml::table* t : layers_) {
-      if (t == nullptr) continue;
-      if (const toml::node* n = t->get(key)) {
+    known(key);
+    for (std::size_t i = 0; i < layers_.size(); ++i) {
+      if (layers_[i].table == nullptr) continue;
+      if (const toml::node* n = layers_[i].table->get(key)) {
         ctx_.where[field(key)] = location(n, file_);
+        ctx_.shown[field(key)] = written(key, static_cast<int>(i));
         return n;
       }
     }
     ctx_.where[field(key)] = file_ + " (default)";
+    ctx_.shown[field(key)] = written(key, -1);
     return nullptr;
   }
   bool has(std::string_view key) const { return layer_of(key) >= 0; }
   // The layer that gives key (0 is the highest: the last --set), -1 if none does.
   int layer_of(std::string_view key) const {
     for (std::size_t i = 0; i < layers_.size(); ++i) {
-      if (layers_[i] != nullptr && layers_[i]->get(key) != nullptr) return static_cast<int>(i);
+      if (layers_[i].table != nullptr && layers_[i].table->get(key) != nullptr) return static_cast<int>(i);
     }
     return -1;
   }
@@ -121,8 +166,8 @@ class Reader {
   double number(std::string_view key, double fallback) { return opt_number(key).value_or(fallback); }
   double required_number(std::string_view key) {
     if (!has(key)) {
-      ctx_.error(where_, field(key), "", "missing (required number)");
       find(key);
+      ctx_.error(where_, field(key), "", "missing (required number)");
       return std::nan("");
     }
     return opt_number(key).value_or(std::nan(""));
@@ -212,7 +257,10 @@ class Reader {
       const std::string name = field(key) + "[" + std::to_string(i) + "]";
       if (const toml::table* t = e.as_table()) {
         ctx_.where[name] = location(&e, file_);
-        out.emplace_back(std::vector<const toml::table*>{t}, name, file_, ctx_, location(&e, file_));
+        const int layer = layer_of(key);
+        const bool in_file = layer >= 0 && layers_[static_cast<std::size_t>(layer)].vehicle_file;
+        ctx_.shown[name] = (in_file ? "" : space_) + name;
+        out.emplace_back(std::vector<Layer>{{t, in_file}}, name, file_, ctx_, location(&e, file_), space_, in_file);
       } else {
         ctx_.error(location(&e, file_), name, node_text(e), "must be a table");
       }
@@ -221,38 +269,71 @@ class Reader {
   }
 
   Reader sub(std::string_view key) {
-    used_.insert(std::string(key));
-    std::vector<const toml::table*> layers;
+    known(key);
+    std::vector<Layer> layers;
     std::string where;  // the lowest layer's table: usually the vehicle file's [table] line
-    for (const toml::table* t : layers_) {
+    bool where_in_file = where_in_vehicle_file_;
+    for (std::size_t i = 0; i < layers_.size(); ++i) {
+      const toml::table* t = layers_[i].table;
       const toml::node* n = t == nullptr ? nullptr : t->get(key);
       if (n != nullptr && !n->is_table()) {
+        ctx_.shown[field(key)] = written(key, static_cast<int>(i));
         ctx_.error(location(n, file_), field(key), node_text(*n), "must be a table");
         n = nullptr;
       }
-      layers.push_back(n == nullptr ? nullptr : n->as_table());
-      if (n != nullptr) where = location(n, file_);
+      layers.push_back({n == nullptr ? nullptr : n->as_table(), layers_[i].vehicle_file});
+      if (n != nullptr) {
+        where = location(n, file_);
+        where_in_file = layers_[i].vehicle_file;
+      }
     }
-    return Reader(std::move(layers), field(key), file_, ctx_, where.empty() ? where_ : where);
+    return Reader(std::move(layers), field(key), file_, ctx_, where.empty() ? where_ : where, space_, where_in_file);
   }
 
-  // Reports every key no reader asked for.
+  // A plausibility warning (not an error) for a given value outside the physical band [lo, hi]
+  // of what: most likely a unit or a typo (1.8 for 1800 kg). Values that validate() rejects, and
+  // 0 where 0 switches a term off, are left to it.
+  void plausible(std::string_view key, double value, double lo, double hi, const std::string& unit,
+                 const std::string& what) {
+    if (!has(key) || !std::isfinite(value) || !(value > 0.0) || (value >= lo && value <= hi)) return;
+    ctx_.warn(ctx_.where[field(key)], field(key), plant::number_text(value),
+              "outside the plausible band [" + plant::number_text(lo) + ", " + plant::number_text(hi) + "]" +
+                  (unit.empty() ? "" : " " + unit) + " of " + what + " (a unit or a typo? it runs as given)");
+  }
+
+  // Reports every key no reader asked for (with a hint, once every table is read).
   void finish() {
-    for (const toml::table* t : layers_) {
+    for (std::size_t i = 0; i < layers_.size(); ++i) {
+      const toml::table* t = layers_[i].table;
       if (t == nullptr) continue;
       for (const auto& [k, n] : *t) {
-        if (used_.count(std::string(k.str())) == 0) {
-          ctx_.error(location(&n, file_), field(k.str()), "", "unknown key");
+        if (used_.count(std::string(k.str())) != 0) continue;
+        // a table from --set (a.b.c=1) holds one key: name the whole key the user wrote
+        std::string key(k.str());
+        const toml::node* leaf = &n;
+        while (leaf->is_table() && leaf->as_table()->size() == 1 && is_from_set(*leaf)) {
+          const toml::table& inner = *leaf->as_table();
+          std::string inner_key;
+          for (const auto& entry : inner) inner_key = std::string(entry.first.str());
+          key += "." + inner_key;
+          leaf = inner.get(inner_key);
         }
+        ctx_.errors.push_back(location(&n, file_) + ": " + written(key, static_cast<int>(i)) + ": unknown key");
+        ctx_.unknown.push_back({ctx_.errors.size() - 1, space_ + field(key), layers_[i].vehicle_file});
       }
     }
   }
 
  private:
-  std::vector<const toml::table*> layers_;
+  static bool is_from_set(const toml::node& n) {
+    return n.source().path && n.source().path->rfind("--set", 0) == 0;
+  }
+  std::vector<Layer> layers_;
   std::string prefix_, file_;
   Context& ctx_;
   std::string where_;
+  std::string space_;
+  bool where_in_vehicle_file_ = false;
   std::set<std::string> used_;
 };
 

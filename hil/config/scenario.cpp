@@ -85,14 +85,35 @@ const char* scenarios_env() {
   return env != nullptr && env[0] != '\0' ? env : nullptr;
 }
 
+// <configured data dir>/<relative> if that folder exists, else "". The folder the library was
+// configured to be installed in (CMake's EHPT_DATA_INSTALL_DIR under CMAKE_INSTALL_PREFIX, an
+// absolute path compiled in): the last place looked, for a program of one's own that links the
+// installed static library (its executable says nothing about ehpt's prefix). A fixed path,
+// never one derived by climbing from where the code is.
+std::string configured(const std::string& relative) {
+  const std::string dir = configured_data_dir();
+  if (dir.empty() || relative.empty()) return dir;
+  return is_dir(fs::path(dir) / relative) ? (fs::path(dir) / relative).string() : "";
+}
+
 }  // namespace
+
+std::string configured_data_dir() {
+#if defined(EHPT_INSTALLED_DATA_DIR)
+  const std::string dir = EHPT_INSTALLED_DATA_DIR;
+  return fs::path(dir).is_absolute() ? dir : "";
+#else
+  return "";
+#endif
+}
 
 std::string scenarios_dir() {
   if (const char* env = scenarios_env()) return env;
   if (is_dir("scenarios")) return "scenarios";
   // an installed ehpt uses its own data (also one installed into a folder of the build tree)
   if (std::string dir = installed("share/ehpt/scenarios"); !dir.empty()) return dir;
-  return in_source_tree("scenarios");
+  if (std::string dir = in_source_tree("scenarios"); !dir.empty()) return dir;
+  return configured("scenarios");
 }
 
 std::string scenarios_search_text() {
@@ -100,7 +121,91 @@ std::string scenarios_search_text() {
   std::string s = "./scenarios";
   if (const fs::path prefix = code_prefix(); !prefix.empty()) s += ", " + (prefix / "share/ehpt/scenarios").string();
   if (!in_source_tree("").empty()) s += ", the source tree";
+  if (const std::string dir = configured_data_dir(); !dir.empty() && dir != (code_prefix() / "share/ehpt").string()) {
+    s += ", " + (fs::path(dir) / "scenarios").string();
+  }
   return s;
+}
+
+std::vector<std::string> vehicles_dirs() {
+  std::vector<std::string> out;
+  const auto add = [&](const std::string& dir) {
+    if (!dir.empty() && is_dir(dir) && std::find(out.begin(), out.end(), dir) == out.end()) out.push_back(dir);
+  };
+  if (const char* env = scenarios_env()) add((fs::path(env).parent_path() / "vehicles").string());
+  if (is_dir("vehicles")) add("vehicles");
+  add(installed("share/ehpt/vehicles"));
+  add(in_source_tree("vehicles"));
+  add(configured("vehicles"));
+  return out;
+}
+
+std::vector<std::string> vehicle_names() {
+  std::vector<std::string> names;
+  for (const std::string& dir : vehicles_dirs()) {
+    std::error_code ec;
+    for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+      std::error_code e;
+      if (it->path().extension() == ".toml" && fs::is_regular_file(it->path(), e)) names.push_back(it->path().stem().string());
+    }
+  }
+  std::sort(names.begin(), names.end());
+  names.erase(std::unique(names.begin(), names.end()), names.end());
+  return names;
+}
+
+std::string resolve_vehicle(const std::string& name, std::string& reason) {
+  std::string stem = name;
+  if (stem.size() > 5 && stem.ends_with(".toml")) stem.resize(stem.size() - 5);
+  const std::vector<std::string> dirs = vehicles_dirs();
+  if (!stem.empty() && stem.find('/') == std::string::npos && stem != "." && stem != "..") {
+    for (const std::string& dir : dirs) {
+      const fs::path candidate = fs::path(dir) / (stem + ".toml");
+      std::error_code ec;
+      if (fs::is_regular_file(candidate, ec)) return candidate.string();
+    }
+  }
+  if (dirs.empty()) {
+    reason = "no shipped vehicle of that name: no vehicles folder found (looked next to the scenarios: " +
+             scenarios_search_text() + ")";
+    return "";
+  }
+  const std::vector<std::string> names = vehicle_names();
+  std::string list;
+  for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+  reason = "no shipped vehicle of that name (in " + dirs.front() + (dirs.size() > 1 ? " and others" : "") +
+           "; the vehicles are " + list + ")";
+  if (const std::string best = closest_name(stem, names); !best.empty()) reason += "; did you mean \"" + best + "\"?";
+  return "";
+}
+
+std::size_t edit_distance(std::string_view a, std::string_view b) {
+  const auto lower = [](char c) { return c >= 'A' && c <= 'Z' ? static_cast<char>(c - 'A' + 'a') : c; };
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (lower(a[i - 1]) == lower(b[j - 1]) ? 0 : 1)});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+std::string closest_name(const std::string& word, const std::vector<std::string>& candidates) {
+  std::string best;
+  std::size_t best_d = word.size() / 3 + 1;  // more than a third differs: not a near miss
+  for (const std::string& c : candidates) {
+    const std::size_t d = edit_distance(word, c);
+    if (d < best_d) {
+      best_d = d;
+      best = c;
+    }
+  }
+  return best;
 }
 
 std::string resolve_scenario(const std::string& name, std::string& reason) {

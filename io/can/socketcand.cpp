@@ -612,6 +612,14 @@ std::unique_ptr<Transport> open_socketcand_server(const std::string& host, std::
   return std::make_unique<Server>(fd, name);
 }
 
+namespace {
+std::string seconds_text(double s) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", s);
+  return buf;
+}
+}  // namespace
+
 std::unique_ptr<Transport> open_socketcand_client(const std::string& host, std::uint16_t port,
                                                   const std::string& channel, double timeout_s, std::string& error) {
   const std::string name = "socketcand:" + host + ":" + std::to_string(port);
@@ -622,24 +630,36 @@ std::unique_ptr<Transport> open_socketcand_client(const std::string& host, std::
     return nullptr;
   }
   const std::int64_t deadline = now_ns() + static_cast<std::int64_t>(timeout_s * 1e9);
-  const int fd = ::socket(addr.ss_family, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
-  if (fd < 0) {
-    error = name + ": cannot create a socket: " + std::strerror(errno);
-    return nullptr;
-  }
-  if (::connect(fd, reinterpret_cast<const sockaddr*>(&addr), len) != 0 && errno != EINPROGRESS) {
-    const int e = errno;
+  // A plant that is still loading its scenario does not listen yet: a refused connection is
+  // tried again every 20 ms until the deadline (an ECU started next to its plant needs no sleep).
+  int fd = -1;
+  for (;;) {
+    fd = ::socket(addr.ss_family, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+    if (fd < 0) {
+      error = name + ": cannot create a socket: " + std::strerror(errno);
+      return nullptr;
+    }
+    int e = 0;
+    if (::connect(fd, reinterpret_cast<const sockaddr*>(&addr), len) != 0 && errno != EINPROGRESS) {
+      e = errno;
+    } else {
+      pollfd p{fd, POLLOUT, 0};
+      const int ms = static_cast<int>(std::max<std::int64_t>(0, (deadline - now_ns()) / 1'000'000));
+      socklen_t so_len = sizeof e;
+      if (::poll(&p, 1, ms) != 1) {
+        e = ETIMEDOUT;
+      } else if (getsockopt(fd, SOL_SOCKET, SO_ERROR, &e, &so_len) != 0) {
+        e = errno;
+      }
+    }
+    if (e == 0) break;
     ::close(fd);
-    error = name + ": cannot connect: " + std::strerror(e);
-    return nullptr;
-  }
-  pollfd p{fd, POLLOUT, 0};
-  const int ms = static_cast<int>(std::max<std::int64_t>(0, (deadline - now_ns()) / 1'000'000));
-  int so_error = 0;
-  socklen_t so_len = sizeof so_error;
-  if (::poll(&p, 1, ms) != 1 || getsockopt(fd, SOL_SOCKET, SO_ERROR, &so_error, &so_len) != 0 || so_error != 0) {
-    ::close(fd);
-    error = name + ": cannot connect: " + (so_error != 0 ? std::strerror(so_error) : "timed out");
+    if (e == ECONNREFUSED && now_ns() + 20'000'000 < deadline) {
+      ::usleep(20'000);
+      continue;
+    }
+    error = name + ": cannot connect: " + (e == ETIMEDOUT ? std::string("timed out") : std::string(std::strerror(e))) +
+            (e == ECONNREFUSED ? " (nothing listened there within the " + seconds_text(timeout_s) + " s it waits)" : "");
     return nullptr;
   }
   set_nodelay(fd);

@@ -72,5 +72,43 @@ TEST(SocketcandServer, SilentClientsLoseTheirSlotsAndAnEcuGetsIn) {
   for (int fd : silent) ::close(fd);
 }
 
+
+// An ECU started before its plant listens (the plant is still loading its scenario) connects
+// once the plant is up, within its timeout; with nobody listening it gives up at the timeout
+// and says so.
+TEST(SocketcandClient, WaitsForAPlantThatIsNotListeningYet) {
+  const std::uint16_t port = free_port();
+  std::string error;
+  std::unique_ptr<Transport> ecu;
+  std::thread client([&] { ecu = open_socketcand_client("127.0.0.1", port, "can0", 5.0, error); });
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // refused until now
+  std::string server_error;
+  auto server = open_socketcand_server("127.0.0.1", port, server_error);
+  ASSERT_TRUE(server) << server_error;
+  Frame none[4];
+  const auto start = std::chrono::steady_clock::now();
+  while (!server->has_peer() && std::chrono::steady_clock::now() - start < std::chrono::seconds(4)) {
+    server->wait(20'000'000);
+    server->receive(none);
+  }
+  client.join();
+  EXPECT_TRUE(ecu) << error;
+  EXPECT_TRUE(server->has_peer());
+}
+
+TEST(SocketcandClient, GivesUpAtItsTimeoutWhenNothingListens) {
+  const std::uint16_t port = free_port();
+  std::string error;
+  const auto start = std::chrono::steady_clock::now();
+  auto ecu = open_socketcand_client("127.0.0.1", port, "can0", 0.5, error);
+  const double waited_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_FALSE(ecu);
+  EXPECT_NE(error.find("cannot connect: Connection refused (nothing listened there within the 0.5 s it waits)"),
+            std::string::npos)
+      << error;
+  EXPECT_GT(waited_s, 0.4);  // it tried again until its timeout
+  EXPECT_LT(waited_s, 3.0);  // and no longer
+}
+
 }  // namespace
 }  // namespace ehpt::io::can

@@ -74,6 +74,21 @@ a, b = (json.load(open(f))["provenance"] for f in sys.argv[1:])
 assert a["run_id"] == b["run_id"], (a["run_id"], b["run_id"])
 assert [i["sha256"] for i in a["inputs"]] == [i["sha256"] for i in b["inputs"]]
 EOF
+# an own scenario in an empty folder names the shipped vehicle: vehicle = "psecu2" resolves to the
+# installed vehicles/psecu2.toml (no path to the package in the scenario but the cycle's)
+mkdir -p "$tmp/own"
+printf 'description = "mine"\nvehicle = "psecu2"\ncycle = "%s"\n[solver]\nduration_s = 60.0\n' \
+  "$prefix/share/ehpt/data/cycles/cycle_nedc.csv" >"$tmp/own/mine.toml"
+(cd "$tmp/own" && "${hidden[@]}" "$ehpt" run mine.toml --set vehicle.vehicle.mass_kg=1800 --out run_named --quiet) ||
+  fail "a scenario with vehicle = \"psecu2\" does not run with the installed package"
+/usr/bin/python3 - "$tmp/own/run_named/summary.json" "$prefix/share/ehpt/vehicles/psecu2.toml" <<'EOF'
+import json, sys
+s = json.load(open(sys.argv[1]))
+paths = [i["path"] for i in s["provenance"]["inputs"]]
+assert sys.argv[2] in paths, f"the installed psecu2.toml is not among the inputs: {paths}"
+assert s["status"] == "ok" and s["distance_m"] > 50.0, (s["status"], s["distance_m"])
+print(f"vehicle = \"psecu2\" from an empty folder: {s['distance_m']:.1f} m, inputs {paths[:2]}")
+EOF
 "${hidden[@]}" "$ehpt" plot run_installed >/dev/null
 ls run_installed/*.png >/dev/null || fail "the installed plot tool drew nothing"
 # $EHPT_SCENARIOS still wins over the installed folder
@@ -85,7 +100,7 @@ EHPT_SCENARIOS="$tmp/myscenarios" "$ehpt" list | grep -q "^ev_mine *mine" || fai
 # an ehpt without data (the binary copied alone): a clear error, exit 1 / 2, nothing run
 mkdir -p "$tmp/lonely/bin" && cp "$ehpt" "$tmp/lonely/bin/ehpt"
 rc=0; EHPT_SCENARIOS= "$tmp/lonely/bin/ehpt" list 2>"$tmp/lonely.err" || rc=$?
-[ "$rc" -eq 1 ] && grep -qF "no scenarios folder found (looked in ./scenarios, $tmp/lonely/share/ehpt/scenarios)" "$tmp/lonely.err" ||
+[ "$rc" -eq 1 ] && grep -qF "no scenarios folder found (looked in ./scenarios, $tmp/lonely/share/ehpt/scenarios" "$tmp/lonely.err" ||
   { cat "$tmp/lonely.err"; fail "ehpt list without data: rc $rc"; }
 rc=0; "${hidden[@]}" "$tmp/lonely/bin/ehpt" run ev_nedc --out lonely_run 2>"$tmp/lonely.err" || rc=$?
 [ "$rc" -eq 2 ] && grep -q "no scenarios folder found" "$tmp/lonely.err" && [ ! -e lonely_run ] ||
@@ -110,6 +125,31 @@ cmake --build "$tmp/embed" -j"$(nproc)" >"$tmp/embed-build.log" || { cat "$tmp/e
 "${hidden[@]}" "$tmp/embed/embed_ecu" >"$tmp/embed.txt"
 "${hidden[@]}" "$tmp/embed/embed_ecu" --torque-limit-Nm 100 >"$tmp/embed_limited.txt"
 "$ehpt" run ev_nedc --out "$tmp/ev_nedc" --quiet
+# a scenario by name in the embedding program: the installed library knows the data folder it
+# was configured for (<CMAKE_INSTALL_PREFIX>/share/ehpt, compiled into hil/config/scenario.cpp).
+# This install went to $prefix instead, so the configured folder is given the installed data in
+# a private mount namespace (a tmpfs over its nearest existing parent, seen by this process only)
+configured="$(sed -n 's/^CMAKE_INSTALL_PREFIX:[A-Z]*=//p' "$build/CMakeCache.txt")/share/ehpt"
+parent="$configured"; while [ ! -d "$parent" ]; do parent="$(dirname "$parent")"; done
+if [ ! -e "$configured" ]; then
+  # without the data there the name does not resolve: it is that folder the library looks in
+  rc=0; (cd "$tmp/elsewhere" && "${hidden[@]}" "$tmp/embed/embed_ecu" --scenario ev_nedc) >/dev/null 2>"$tmp/embed_name.err" || rc=$?
+  [ "$rc" -eq 2 ] && grep -q "no such scenario file or name" "$tmp/embed_name.err" ||
+    { cat "$tmp/embed_name.err"; fail "embed_ecu --scenario ev_nedc: rc $rc without the configured data folder"; }
+fi
+if [ "$parent" != "/" ] && unshare -m --propagation private true 2>/dev/null; then
+  (cd "$tmp/elsewhere" && unshare -m --propagation private -- sh -c '
+     mount --bind "$1" "$2" || exit 90
+     if [ "$3" != "$4" ]; then mount -t tmpfs tmpfs "$4" && mkdir -p "$3" || exit 91; fi
+     mount --bind "$5" "$3" || exit 92
+     exec env -u EHPT_SCENARIOS "$6" --scenario ev_nedc' \
+     sh "$tmp/empty" "$src" "$configured" "$parent" "$prefix/share/ehpt" "$tmp/embed/embed_ecu") >"$tmp/embed_name.txt" ||
+    fail "embed_ecu --scenario ev_nedc (by name, the installed library's data folder $configured) failed"
+  cmp "$tmp/embed.txt" "$tmp/embed_name.txt" || fail "embed_ecu by name differs from the run by path"
+  echo "embed: --scenario ev_nedc resolved in the configured data folder $configured"
+else
+  echo "note: no private mount namespace (or no parent of $configured): the name lookup of the embedding program is not checked"
+fi
 /usr/bin/python3 - "$tmp/embed.txt" "$tmp/embed_limited.txt" "$tmp/ev_nedc/summary.json" <<'EOF'
 import json, sys
 def figures(path):
