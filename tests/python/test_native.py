@@ -50,8 +50,9 @@ class StructuredErrors(unittest.TestCase):
         parts = sorted((p.where, p.file, p.line, p.key, p.value, p.message) for p in e.problems)
         self.assertEqual(parts, [
             ('--set solver.duration_s="100"', None, None, "solver.duration_s", "'100'", "must be a number"),
-            ("--set vehicle.ecu.soc_ref=1.5", None, None, "ecu.soc_ref", "1.5", "must be in [0, 1]"),
-            ("--set vehicle.ecu.soc_reff=0.6", None, None, "ecu.soc_reff", None, "unknown key"),
+            ("--set vehicle.ecu.soc_ref=1.5", None, None, "vehicle.ecu.soc_ref", "1.5", "must be in [0, 1]"),
+            ("--set vehicle.ecu.soc_reff=0.6", None, None, "vehicle.ecu.soc_reff", None,
+             "unknown key; did you mean `vehicle.ecu.soc_ref`?"),
         ])
         self.assertIn("3 problems", str(e))
         self.assertEqual((e.key, e.where), (e.problems[0].key, e.problems[0].where))  # the first one's
@@ -61,7 +62,7 @@ class StructuredErrors(unittest.TestCase):
         # the value is found by its quotes, not by the first ": " after it
         e = self.error("ev_nedc", {"vehicle.battery.soc_initial": "a: b = c", "output.signals": ["time_s", "x: y"]})
         got = {p.key: (p.value, p.message) for p in e.problems}
-        self.assertEqual(got["battery.soc_initial"], ("'a: b = c'", "must be a number"))
+        self.assertEqual(got["vehicle.battery.soc_initial"], ("'a: b = c'", "must be a number"))
         self.assertEqual(got["output.signals"][0], '"x: y"')
         self.assertTrue(got["output.signals"][1].startswith("unknown signal; available: time_s, "))
 
@@ -99,7 +100,7 @@ class StructuredErrors(unittest.TestCase):
         e = self.error("psecu2_nedc", {"vehicle.ecu.soc_ref": 1.5})
         p = e.problems[0]
         self.assertIsInstance(p, ehpt.Problem)
-        self.assertEqual(str(p), "--set vehicle.ecu.soc_ref=1.5: ecu.soc_ref = 1.5: must be in [0, 1]")
+        self.assertEqual(str(p), "--set vehicle.ecu.soc_ref=1.5: vehicle.ecu.soc_ref = 1.5: must be in [0, 1]")
         self.assertEqual(repr(p), "ehpt.Problem(" + repr(str(p)) + ")")
 
 
