@@ -166,10 +166,9 @@ bool load_vehicle_chain(FileRef ref, std::vector<toml::table>& docs, Context& ct
   return true;
 }
 
-}  // namespace
-
-bool load_scenario(const std::string& path, const std::vector<std::string>& overrides, Scenario& out,
-                   std::vector<std::string>& errors) {
+// load_scenario's work; cycle: the cycle as arrays in place of the scenario's file (nullptr: the file)
+bool load(const std::string& path, const std::vector<std::string>& overrides, const CycleArrays* cycle, Scenario& out,
+          std::vector<std::string>& errors) {
   Context ctx;
   out = Scenario{};
   out.path = path;
@@ -192,7 +191,11 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
 
   out.description = sc.text("description", "");
   const FileRef vehicle_ref = choose_vehicle(layers, sc, path, ctx);
-  const FileRef cycle_ref = sc.path("cycle", false);
+  FileRef cycle_ref = sc.path("cycle", false);
+  if (cycle != nullptr) {
+    cycle_ref = FileRef{cycle->name, cycle->name, cycle->name, "cycle"};
+    ctx.cycle_arrays = cycle;
+  }
   // repeat the cycle to fill solver.duration_s, as the library's EV examples do
   const bool cycle_periodic = sc.flag("cycle_periodic", false);
   out.vehicle_path = vehicle_ref.path;
@@ -370,6 +373,18 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
   out.inputs = std::move(ctx.inputs);
   errors = ctx.errors;
   return errors.empty();
+}
+
+}  // namespace
+
+bool load_scenario(const std::string& path, const std::vector<std::string>& overrides, Scenario& out,
+                   std::vector<std::string>& errors) {
+  return load(path, overrides, nullptr, out, errors);
+}
+
+bool load_scenario_with_cycle(const std::string& path, const std::vector<std::string>& overrides,
+                              const CycleArrays& cycle, Scenario& out, std::vector<std::string>& errors) {
+  return load(path, overrides, &cycle, out, errors);
 }
 
 }  // namespace ehpt::hil

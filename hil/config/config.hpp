@@ -88,4 +88,19 @@ std::string toml_string(const std::string& text);
 bool load_scenario(const std::string& path, const std::vector<std::string>& overrides, Scenario& out,
                    std::vector<std::string>& errors);
 
+// A drive cycle given as numbers instead of a CSV file (the Python module's cycle=(t_s, v_m_s)):
+// time in s, speed in m/s. It takes the place of the scenario's `cycle` file (cycle_periodic
+// applies as to a file) and is checked by the same rules with the same messages, a value named
+// "<name>:<index>" (0-based) where a file's is "file:line". Its numbers' bytes (time_s then
+// speed_m_s, as stored) are an input of the run, listed under name with their SHA-256.
+struct CycleArrays {
+  std::string name = "<cycle arrays>";
+  std::vector<double> time_s;
+  std::vector<double> speed_m_s;
+};
+
+// load_scenario with the cycle given as arrays.
+bool load_scenario_with_cycle(const std::string& path, const std::vector<std::string>& overrides,
+                              const CycleArrays& cycle, Scenario& out, std::vector<std::string>& errors);
+
 }  // namespace ehpt::hil

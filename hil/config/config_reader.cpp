@@ -211,11 +211,36 @@ void keep_source(const std::string& field, const io::CsvTable& t, const std::vec
   ctx.failed_tables.erase(field);
 }
 
+// A cycle given as arrays (load_scenario_with_cycle): a table source as a CSV file's, with the
+// index as its "line" and the numbers' shortest text as written, so that plant/'s problems
+// are reported as a file's are.
+plant::Table1d cycle_of_arrays(const CycleArrays& a, const std::string& field, bool periodic, Context& ctx) {
+  ctx.failed_tables.insert(field);
+  if (a.time_s.size() != a.speed_m_s.size()) {
+    ctx.error(a.name, field, std::to_string(a.time_s.size()) + " time stamps, " + std::to_string(a.speed_m_s.size()) + " speeds",
+              "the two arrays must have the same length");
+    return {};
+  }
+  std::string bytes(reinterpret_cast<const char*>(a.time_s.data()), a.time_s.size() * sizeof(double));
+  bytes.append(reinterpret_cast<const char*>(a.speed_m_s.data()), a.speed_m_s.size() * sizeof(double));
+  ctx.read_file(a.name, bytes);
+  TableSource s{a.name, {}, {"time_s", "speed_m_s"}, {{}, {}}};
+  for (std::size_t i = 0; i < a.time_s.size(); ++i) {
+    s.lines.push_back(static_cast<int>(i));
+    s.text[0].push_back(io::number_text(a.time_s[i]));
+    s.text[1].push_back(io::number_text(a.speed_m_s[i]));
+  }
+  ctx.tables[field] = std::move(s);
+  ctx.failed_tables.erase(field);
+  return plant::Table1d(a.time_s, a.speed_m_s, periodic ? plant::Extrapolation::kPeriodic : plant::Extrapolation::kHold);
+}
+
 }  // namespace
 
 // Cycle: time_s and speed_kmh or speed_m_s; other columns ignored. After its last row the
 // last speed is held, or the cycle repeats (periodic).
 plant::Table1d load_cycle(const FileRef& ref, const std::string& field, bool periodic, Context& ctx) {
+  if (ctx.cycle_arrays != nullptr) return cycle_of_arrays(*ctx.cycle_arrays, field, periodic, ctx);
   io::CsvTable t;
   if (!read_table(ref, field, t, ctx)) return {};
   const int ti = t.column_index("time_s");

@@ -74,6 +74,7 @@ struct Context {
     const auto it = shown.find(field);
     return it == shown.end() ? field : it->second;
   }
+  const CycleArrays* cycle_arrays = nullptr;  // load_scenario_with_cycle: load_cycle takes these, not a file
   // every file read, in the order read (each once): what the run depends on (hil/config/config.hpp)
   std::vector<InputFile> inputs;
   void read_file(const std::string& path, const std::string& content);
@@ -344,6 +345,7 @@ bool parse_toml(const std::string& path, toml::table& out, Context& ctx, const F
 bool parse_override(const std::string& text, toml::table& out, Context& ctx);
 
 // CSV-backed tables, remembered in ctx so that a problem in a cell is reported at its line.
+// (ctx.cycle_arrays: those numbers instead of the file)
 plant::Table1d load_cycle(const FileRef& ref, const std::string& field, bool periodic, Context& ctx);
 plant::Table1d load_curve(const FileRef& ref, const std::string& field, Context& ctx);
 plant::Table2d load_map(const FileRef& ref, const std::string& field, Context& ctx);

@@ -123,7 +123,7 @@ class SteppingErrors(unittest.TestCase):
         self.assertIn("motTauRef", str(cm.exception))
         c = ehpt.PsdCommand(motTauRef_Nm=2.0, stamp=ehpt.Stamp(step=7))
         c.stamp.sequence = 3  # a field of the stamp, in place
-        self.assertEqual((c.motTauRef_Nm, c.iceON, c.stamp.step, c.stamp.sequence), (2.0, True, 7, 3))
+        self.assertEqual((c.motTauRef_Nm, c.iceON, c.stamp.step, c.stamp.sequence), (2.0, False, 7, 3))
         self.assertIn("motTauRef_Nm=2.0", repr(c))
         self.assertEqual(ehpt.EvSensors._fields[:2], ("stamp", "driverRequest_Nm"))
         with self.assertRaises(TypeError) as cm:
