@@ -185,6 +185,7 @@ scenarios.")
 set(CPACK_DEBIAN_PYTHON_PACKAGE_NAME python3-ehpt)
 set(CPACK_DEBIAN_PYTHON_PACKAGE_SECTION python)
 set(CPACK_DEBIAN_PYTHON_PACKAGE_DEPENDS "ehpt (= ${EHPT_DEB_VERSION}), python3 (>= 3.11), python3 (<< 3.12), python3-numpy")
+set(CPACK_DEBIAN_PYTHON_PACKAGE_SUGGESTS "python3-pandas")  # Result.to_dataframe() (docs/python.md)
 set(CPACK_DEBIAN_PYTHON_DESCRIPTION "Python 3 module of ehpt, the power-train plant models
 ehpt simulates the power train of an electric or hybrid vehicle on a drive
 cycle (the physics of the EHPowerTrain Modelica library in C++), for
