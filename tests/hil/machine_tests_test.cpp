@@ -199,7 +199,8 @@ TEST(MachineScenarios, TestAMDrive) {
 }
 
 // Bad rig data is reported with where it came from, field and value, before anything runs; the
-// profiles' level keys carry their unit (offset_rad_s), and so do their messages.
+// profiles' level keys carry their unit (offset_rad_s), and so do their messages, which name
+// each key as the user wrote it (`vehicle.speed.offset_rad_s` on the command line).
 TEST(MachineScenarios, ProblemsNameTheFieldTheValueAndWhereItCameFrom) {
   Scenario sc;
   std::vector<std::string> errors;
@@ -212,14 +213,14 @@ TEST(MachineScenarios, ProblemsNameTheFieldTheValueAndWhereItCameFrom) {
   ASSERT_EQ(errors.size(), 3u);
   std::string all;
   for (const std::string& e : errors) all += e + "\n";
-  EXPECT_NE(all.find("--set vehicle.speed.amplitude_rad_s=400: speed.amplitude_rad_s = 400: takes the speed to 400 "
+  EXPECT_NE(all.find("--set vehicle.speed.amplitude_rad_s=400: vehicle.speed.amplitude_rad_s = 400: takes the speed to 400 "
                      "rad/s, beyond machine.speed_max_rad_s = 317"),
             std::string::npos)
       << all;
-  EXPECT_NE(all.find("--set vehicle.request.rising_s=0: request.rising_s = 0: must be a finite number > 0"),
+  EXPECT_NE(all.find("--set vehicle.request.rising_s=0: vehicle.request.rising_s = 0: must be a finite number > 0"),
             std::string::npos)
       << all;
-  EXPECT_NE(all.find("--set vehicle.speed.offset_rad_s=nan: speed.offset_rad_s = nan: must be a finite number"),
+  EXPECT_NE(all.find("--set vehicle.speed.offset_rad_s=nan: vehicle.speed.offset_rad_s = nan: must be a finite number"),
             std::string::npos)
       << all;
   errors.clear();
