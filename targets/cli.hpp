@@ -56,5 +56,6 @@ int cmd_replay(const std::vector<std::string>& args);   // targets/cmd_replay.cp
 int cmd_list(const std::vector<std::string>& args);     // targets/cmd_list_signals.cpp
 int cmd_signals(const std::vector<std::string>& args);  // targets/cmd_list_signals.cpp
 int cmd_plot(const std::vector<std::string>& args);     // targets/cmd_plot.cpp
+int cmd_dbc(const std::vector<std::string>& args);      // targets/cmd_dbc.cpp
 
 }  // namespace ehpt::cli

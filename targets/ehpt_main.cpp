@@ -60,6 +60,7 @@ const char* kMainHelp =
     "  ecu SCENARIO     run the scenario's built-in ECU as its own process on a CAN bus\n"
     "  bench            the timing and determinism benchmark; a table and bench.json (--quick: < 1 min)\n"
     "  replay RUN_DIR   run a recorded 'ehpt plant' session again, offline, bit for bit\n"
+    "  dbc FILE.dbc     check a DBC as ehpt reads it, list its messages, decode frames with it\n"
     "  sweep CAMPAIGN   run a campaign (scenarios x parameters) locally or as a Slurm job array;\n"
     "                   merged results.csv and results.jsonl\n"
     "\n"
@@ -89,6 +90,7 @@ int dispatch(std::vector<std::string> args) {
   if (cmd == "list") return cmd_list(args);
   if (cmd == "signals") return cmd_signals(args);
   if (cmd == "plot") return cmd_plot(args);
+  if (cmd == "dbc") return cmd_dbc(args);
   if (cmd == "plant") return cmd_plant(args);
   if (cmd == "ecu") return cmd_ecu(args);
   if (cmd == "bench") return cmd_bench(args);

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: BSD-3-Clause
 # Fuzzes a loader with libFuzzer (clang, ASan + UBSan) for a while.
-# usage: tools/fuzz.sh [csv|scenario] [SECONDS]     (defaults: csv, 60 s)
+# usage: tools/fuzz.sh [csv|scenario|dbc] [SECONDS]     (defaults: csv, 60 s)
 # Installs clang when missing, builds into build-fuzz/ (never build/), fuzzes a writable copy of
 # the corpus in build-fuzz/corpus/NAME (the seeds in tests/fuzz/corpus are only read) and writes
 # crashes, hangs and leaks into build-fuzz/artifacts/. Extra libFuzzer flags: FUZZ_ARGS="...".
@@ -12,10 +12,10 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 name="${1:-csv}"
 seconds="${2:-60}"
 case "$name" in
-  csv|scenario) ;;
-  *) echo "usage: tools/fuzz.sh [csv|scenario] [SECONDS]" >&2; exit 2 ;;
+  csv|scenario|dbc) ;;
+  *) echo "usage: tools/fuzz.sh [csv|scenario|dbc] [SECONDS]" >&2; exit 2 ;;
 esac
-[[ "$seconds" =~ ^[0-9]+$ ]] || { echo "usage: tools/fuzz.sh [csv|scenario] [SECONDS]" >&2; exit 2; }
+[[ "$seconds" =~ ^[0-9]+$ ]] || { echo "usage: tools/fuzz.sh [csv|scenario|dbc] [SECONDS]" >&2; exit 2; }
 
 # clang's libFuzzer runtime is in libclang-rt-14-dev on Debian 12; the rest is what the build needs
 packages=(cmake make clang libclang-rt-14-dev libeigen3-dev libgtest-dev libtomlplusplus-dev)

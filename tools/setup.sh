@@ -9,7 +9,7 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 packages=(cmake make g++ libeigen3-dev libgtest-dev libbenchmark-dev libtomlplusplus-dev
           python3-matplotlib python3-numpy python3-pandas python3-can can-utils
           liblcm-dev liblcm-bin libglib2.0-dev iproute2 libsundials-dev rt-tests
-          pybind11-dev python3-dev dpkg-dev file mkdocs
+          pybind11-dev python3-dev dpkg-dev file mkdocs python3-canmatrix
           help2man lintian man-db)  # the man page, the package check (docs/packaging.md)
 
 "$here/tools/apt_install.sh" "ehpt setup" "${packages[@]}"

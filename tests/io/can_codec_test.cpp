@@ -11,7 +11,6 @@
 #include <fstream>
 #include <limits>
 #include <random>
-#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -19,117 +18,22 @@
 #include "io/can/bus_spec.hpp"
 #include "io/can/candump_log.hpp"
 #include "io/can/contract.hpp"
+#include "io/can/dbc.hpp"
 #include "io/can/socketcand.hpp"
 
 namespace ehpt::io::can {
 namespace {
 
 // ---------------------------------------------------------------------------------------------
-// A small DBC reader: BO_, SG_ and the GenMsgCycleTime attribute, nothing else. Every BO_ or
-// SG_ line it cannot read is an error (so that a line it does not understand cannot be skipped).
+// The DBC read by ehpt's own reader (io/can/dbc.hpp), its problems as lines.
 
-struct DbcSignal {
-  std::string name;
-  int start_bit = -1, length = -1;
-  char byte_order = '?';  // '1' little-endian (Intel), '0' big-endian (Motorola)
-  char sign = '?';        // '+' unsigned, '-' signed
-  double factor = 0, offset = 0, min = 0, max = 0;
-  std::string unit;
-};
-struct DbcMessage {
-  std::uint32_t id = 0;
-  std::string name;
-  int dlc = -1;
-  std::string sender;
-  int cycle_time_ms = -1;  // -1: no BA_, the BA_DEF_DEF_ default applies
-  std::vector<DbcSignal> signals;
-};
-struct Dbc {
-  std::vector<DbcMessage> messages;
-  int default_cycle_time_ms = -1;
-  std::vector<std::string> errors;
-};
+Dbc parse_text(const std::string& text) { return parse_dbc(text, "ehpt.dbc"); }
 
-bool to_double(const std::string& s, double& out) {
-  char* end = nullptr;
-  out = std::strtod(s.c_str(), &end);
-  return !s.empty() && end == s.c_str() + s.size();
-}
-
-Dbc parse_dbc(const std::string& text) {
-  static const std::regex kBo(R"(^BO_ (\d+) (\w+) *: *(\d+) +(\w+)\s*$)");
-  static const std::regex kSg(
-      R"re(^SG_ (\w+) *: *(\d+)\|(\d+)@([01])([+-]) *\(([^,()]+),([^,()]+)\) *\[([^|\]]+)\|([^|\]]+)\] *"([^"]*)" *(.*)$)re");
-  static const std::regex kBa(R"re(^BA_ "GenMsgCycleTime" BO_ (\d+) (\d+) *;\s*$)re");
-  static const std::regex kBaDef(R"re(^BA_DEF_DEF_ "GenMsgCycleTime" (\d+) *;\s*$)re");
-  Dbc dbc;
-  std::istringstream in(text);
-  std::string line;
-  int n = 0;
-  while (std::getline(in, line)) {
-    ++n;
-    const std::size_t first = line.find_first_not_of(" \t");
-    if (first == std::string::npos) continue;
-    line = line.substr(first);
-    while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
-    const std::string where = "line " + std::to_string(n) + ": ";
-    std::smatch m;
-    if (line.rfind("BO_ ", 0) == 0) {
-      if (!std::regex_match(line, m, kBo)) {
-        dbc.errors.push_back(where + "unreadable BO_: " + line);
-        continue;
-      }
-      DbcMessage msg;
-      msg.id = static_cast<std::uint32_t>(std::stoul(m[1]));
-      msg.name = m[2];
-      msg.dlc = std::stoi(m[3]);
-      msg.sender = m[4];
-      dbc.messages.push_back(msg);
-    } else if (line.rfind("SG_ ", 0) == 0) {
-      if (!std::regex_match(line, m, kSg)) {
-        dbc.errors.push_back(where + "unreadable SG_: " + line);
-        continue;
-      }
-      if (dbc.messages.empty()) {
-        dbc.errors.push_back(where + "SG_ before any BO_");
-        continue;
-      }
-      DbcSignal s;
-      s.name = m[1];
-      s.start_bit = std::stoi(m[2]);
-      s.length = std::stoi(m[3]);
-      s.byte_order = m[4].str()[0];
-      s.sign = m[5].str()[0];
-      if (!to_double(m[6], s.factor) || !to_double(m[7], s.offset) || !to_double(m[8], s.min) ||
-          !to_double(m[9], s.max)) {
-        dbc.errors.push_back(where + "a number of SG_ " + s.name + " is not a number");
-        continue;
-      }
-      s.unit = m[10];
-      dbc.messages.back().signals.push_back(s);
-    } else if (line.rfind("BA_ \"GenMsgCycleTime\"", 0) == 0) {
-      if (!std::regex_match(line, m, kBa)) {
-        dbc.errors.push_back(where + "unreadable GenMsgCycleTime: " + line);
-        continue;
-      }
-      const auto id = static_cast<std::uint32_t>(std::stoul(m[1]));
-      bool found = false;
-      for (DbcMessage& msg : dbc.messages) {
-        if (msg.id == id) {
-          msg.cycle_time_ms = std::stoi(m[2]);
-          found = true;
-        }
-      }
-      if (!found) dbc.errors.push_back(where + "GenMsgCycleTime of unknown message " + std::to_string(id));
-    } else if (line.rfind("BA_DEF_DEF_ \"GenMsgCycleTime\"", 0) == 0) {
-      if (!std::regex_match(line, m, kBaDef)) {
-        dbc.errors.push_back(where + "unreadable GenMsgCycleTime default: " + line);
-        continue;
-      }
-      dbc.default_cycle_time_ms = std::stoi(m[1]);
-    }
-  }
-  return dbc;
+std::vector<std::string> problems_of(const Dbc& dbc) {
+  std::vector<std::string> lines;
+  for (const auto& e : dbc.errors) lines.push_back(to_string(dbc, e));
+  for (const auto& w : dbc.warnings) lines.push_back("warning: " + to_string(dbc, w));  // the contract has none
+  return lines;
 }
 
 std::string read_text(const std::string& path) {
@@ -151,7 +55,7 @@ std::string str(const T& v) {
 
 // Every difference between a DBC and the C++ contract (contract.hpp), one line each.
 std::vector<std::string> compare_with_contract(const Dbc& dbc, std::span<const MessageSpec> contract) {
-  std::vector<std::string> diffs = dbc.errors;
+  std::vector<std::string> diffs = problems_of(dbc);
   for (const DbcMessage& d : dbc.messages) {
     const MessageSpec* c = nullptr;
     for (const MessageSpec& m : contract) {
@@ -163,10 +67,14 @@ std::vector<std::string> compare_with_contract(const Dbc& dbc, std::span<const M
     }
     const std::string at = d.name + ": ";
     if (d.id != c->id) diffs.push_back(at + "id " + str(d.id) + " in the DBC, " + str(c->id) + " in contract.hpp");
-    if (d.dlc != c->dlc) diffs.push_back(at + "dlc " + str(d.dlc) + " in the DBC, " + str(c->dlc) + " in contract.hpp");
+    if (d.size_bytes != c->dlc) {
+      diffs.push_back(at + "dlc " + str(d.size_bytes) + " in the DBC, " + str(c->dlc) + " in contract.hpp");
+    }
     const std::string sender = c->sender == Sender::kPlant ? "Plant" : "Ecu";
-    if (d.sender != sender) diffs.push_back(at + "sender " + d.sender + " in the DBC, " + sender + " in contract.hpp");
-    const int cycle = d.cycle_time_ms >= 0 ? d.cycle_time_ms : dbc.default_cycle_time_ms;
+    const std::string senders = d.senders.size() == 1 ? d.senders[0] : str(d.senders.size()) + " senders";
+    if (senders != sender) diffs.push_back(at + "sender " + senders + " in the DBC, " + sender + " in contract.hpp");
+    if (d.extended) diffs.push_back(at + "an extended id in the DBC, standard in contract.hpp");
+    const int cycle = d.cycle_time_ms.value_or(-1);
     if (cycle != c->cycle_time_ms) {
       diffs.push_back(at + "cycle time " + str(cycle) + " in the DBC, " + str(c->cycle_time_ms) + " in contract.hpp");
     }
@@ -185,8 +93,10 @@ std::vector<std::string> compare_with_contract(const Dbc& dbc, std::span<const M
       };
       differ("start bit", ds.start_bit, cs->start_bit);
       differ("length", ds.length, cs->length);
-      differ("byte order", ds.byte_order, '1');  // the contract is little-endian only
-      differ("sign", ds.sign, cs->is_signed ? '-' : '+');
+      differ("byte order", ds.byte_order == ByteOrder::kIntel ? '1' : '0', '1');  // the contract is Intel only
+      differ("sign", ds.is_signed ? '-' : '+', cs->is_signed ? '-' : '+');
+      differ("value type", ds.value_type == SignalValueType::kInteger ? "integer" : "IEEE", "integer");
+      differ("multiplexing", ds.multiplex == Multiplex::kNone ? "none" : "M or mN", "none");
       differ("factor", ds.factor, cs->factor);
       differ("offset", ds.offset, cs->offset);
       differ("min", ds.min, cs->min);
@@ -263,8 +173,8 @@ std::vector<std::string> layout_problems(std::span<const MessageSpec> messages) 
 TEST(CanContract, DbcMatchesContractSignalBySignal) {
   const std::string text = read_text(dbc_path());
   ASSERT_FALSE(text.empty()) << dbc_path();
-  const Dbc dbc = parse_dbc(text);
-  EXPECT_EQ(dbc.errors.size(), 0u) << joined(dbc.errors);
+  const Dbc dbc = parse_text(text);
+  EXPECT_TRUE(problems_of(dbc).empty()) << joined(problems_of(dbc));
   ASSERT_EQ(dbc.messages.size(), kMessageCount);
   const std::vector<std::string> diffs = compare_with_contract(dbc, kMessages);
   EXPECT_TRUE(diffs.empty()) << joined(diffs);
@@ -281,7 +191,7 @@ TEST(CanContract, DbcMatchesContractSignalBySignal) {
   EXPECT_EQ(dbc.messages[0].signals[3].name, "sampleStep");  // the echo of the sample answered
   EXPECT_EQ(dbc.messages[0].signals[3].start_bit, 44);
   EXPECT_EQ(dbc.messages[0].signals[3].length, 16);
-  EXPECT_EQ(dbc.messages[0].signals[3].sign, '+');
+  EXPECT_FALSE(dbc.messages[0].signals[3].is_signed);
   EXPECT_EQ(dbc.messages[0].signals[3].max, 65535.0);
   std::size_t signals = 0;
   for (const DbcMessage& m : dbc.messages) {
@@ -334,7 +244,7 @@ TEST(CanContract, ComparisonReportsEveryKindOfDrift) {
       {"sampleStep : 44|16@1+ (1,0) [0|65535] \"\" Plant\n SG_ counter : 60|4@1+ (1,0) [0|15] \"\" Plant\n\nBO_ 512",
        "sampleStep : 44|15@1+ (1,0) [0|65535] \"\" Plant\n SG_ counter : 60|4@1+ (1,0) [0|15] \"\" Plant\n\nBO_ 512",
        "EvCommand.sampleStep: length 15"},
-      {" SG_ fault : 32|8@1+", " SG_ fault : 32|8@2+", "unreadable SG_"},
+      {" SG_ fault : 32|8@1+", " SG_ fault : 32|8@2+", "ehpt.dbc:33: the byte order (0 Motorola, 1 Intel) '2'"},
   };
   for (const Drift& d : drifts) {
     const std::size_t at = text.find(d.from);
@@ -342,7 +252,7 @@ TEST(CanContract, ComparisonReportsEveryKindOfDrift) {
     ASSERT_EQ(text.find(d.from, at + 1), std::string::npos) << "not unique: " << d.from;
     std::string changed = text;
     changed.replace(at, d.from.size(), d.to);
-    const std::vector<std::string> diffs = compare_with_contract(parse_dbc(changed), kMessages);
+    const std::vector<std::string> diffs = compare_with_contract(parse_text(changed), kMessages);
     bool named = false;
     for (const auto& line : diffs) named = named || line.find(d.expect) != std::string::npos;
     EXPECT_TRUE(named) << "drift '" << d.to << "' not reported as '" << d.expect << "'; reported:\n" << joined(diffs);

@@ -1369,7 +1369,7 @@ TEST(CliHelp, EveryKeyTheRunHelpShowsIsTakenAsShown) {
 TEST(CliHelp, TheDocsQuoteEachHelpAsPrinted) {
   const std::string doc = slurp(ehpt::test::source_path("docs/cli.md"));
   int compared = 0;
-  for (const char* cmd : {"run", "plant", "ecu", "replay", "list", "signals", "plot", "sweep", "bench"}) {
+  for (const char* cmd : {"run", "plant", "ecu", "replay", "list", "signals", "plot", "sweep", "bench", "dbc"}) {
     const std::string heading = std::string("### ehpt ") + cmd + "\n\n```\n";
     const std::size_t at = doc.find(heading);
     if (at == std::string::npos) continue;
@@ -1382,7 +1382,35 @@ TEST(CliHelp, TheDocsQuoteEachHelpAsPrinted) {
     EXPECT_EQ(quoted, help) << "docs/cli.md, 'ehpt " << cmd << "'";
     ++compared;
   }
-  EXPECT_GE(compared, 7);
+  EXPECT_GE(compared, 8);
+}
+
+// 'ehpt dbc': a DBC's problems as FILE:LINE with exit 2; frames decoded with names, units and
+// value names; a frame no message has, or too short for its message, is exit 2.
+TEST(CliDbc, ChecksListsAndDecodes) {
+  const fs::path root = fresh("dbc");
+  const std::string bad = (root / "bad.dbc").string();
+  std::ofstream(bad) << "BO_ 1 A: 8 Ecu\n SG_ S : 60|8@1+ (1,0) [0|0] \"\" Ecu\n";
+  Result r = ehpt_argv({"dbc", bad});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_HAS(r.err, bad + ":2: signal S (start bit 60, 8 bits, Intel) does not fit in the 8 bytes of A");
+  EXPECT_HAS(r.err, "error: " + bad + ": 1 problem; fix the DBC (nothing decoded)");
+
+  const std::string dbc = ehpt::test::source_path("tests/io/dbc/byte_orders.dbc");
+  r = ehpt_argv({"dbc", dbc});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_HAS(r.out, "5 messages, 16 signals, 2 nodes");
+  EXPECT_HAS(r.out, "0x100 EngineCmd: 8 bytes, from Ecu, no cycle time\n");
+  EXPECT_HAS(r.out, "  TorqueReq: bit 7, 16 bits Motorola signed, factor 0.01, [-327.68, 327.67] Nm\n");
+  // TorqueReq 0xFF85 = -123 -> -1.23 Nm; SpeedReq 0xABC = 2748 x 0.5 - 100; Mode bits 27..25 = 0b010
+  r = ehpt_argv({"dbc", dbc, "100#FF85ABC400000000"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_HAS(r.out, "0x100 EngineCmd: TorqueReq = -1.23 Nm, SpeedReq = 1274 rpm, Mode = 2 \"Run\", Enable = 0");
+  r = ehpt_argv({"dbc", dbc, "7FF#00", "100#00"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_HAS(r.err, "frame 1 '7FF#00': no message of " + dbc + " has this id");
+  EXPECT_HAS(r.err, "frame 2 '100#00': 1 data bytes; EngineCmd has 8");
+  EXPECT_HAS(r.err, "error: 2 of 2 frames not decoded");
 }
 
 // 'ehpt list' and 'ehpt plot' say every place they look, then where this ehpt found its folder.
