@@ -152,6 +152,10 @@ class BusPlant final : public ExternalDriver,
     if (opt_.lockstep) {
       b.integer("lockstep_waits_timed_out", waits_timed_out_);
       b.object("round_trip_us", timing);
+      // the exchange's own rate: samples answered from the first command to the last (the
+      // wait for the ECU to start is not in it)
+      b.number("exchange_s", exchange_s());
+      b.number("samples_per_s", samples_per_s());
     } else if (!opt_.realtime) {  // real time: the loop's own figures ("realtime")
       b.integer("missed_ticks", pacer_.missed_ticks());
       b.object("period_error_us", timing);
@@ -170,14 +174,23 @@ class BusPlant final : public ExternalDriver,
                   static_cast<double>(longest_gap_steps_) * h_s_);
     text += buf;
     if (opt_.realtime) return;
-    std::snprintf(buf, sizeof buf, "bus timing    %s p50 %.0f us, p99 %.0f us, max %.0f us\n",
+    std::snprintf(buf, sizeof buf, "bus timing    %s p50 %.0f us, p99 %.0f us, max %.0f us",
                   opt_.lockstep ? "round trip" : "period error", us(hist.quantile_ns(0.5)),
                   us(hist.quantile_ns(0.99)), us(hist.max_ns()));
     text += buf;
+    if (opt_.lockstep && std::isfinite(samples_per_s())) {
+      std::snprintf(buf, sizeof buf, "; %.0f samples/s", samples_per_s());
+      text += buf;
+    }
+    text += "\n";
   }
 
  private:
   static double us(std::int64_t ns) { return static_cast<double>(ns) / 1000.0; }
+  double exchange_s() const { return static_cast<double>(last_command_ns_ - first_command_ns_) * 1e-9; }
+  double samples_per_s() const {
+    return commands_applied_ > 1 && exchange_s() > 0.0 ? static_cast<double>(commands_applied_ - 1) / exchange_s() : NAN;
+  }
   const char* pacing() const { return opt_.lockstep ? "lockstep" : opt_.realtime ? "realtime" : "wall_clock"; }
 
   // steps spent in the safe state (up to the last one seen, if still in it)
@@ -278,6 +291,10 @@ class BusPlant final : public ExternalDriver,
   }
 
   void apply_command(std::int64_t n, const Command& c, Command& command) {
+    if (opt_.lockstep) {  // the exchange rate (the wall-clock pacers keep their own time)
+      last_command_ns_ = clock_.now_ns();
+      if (commands_applied_ == 0) first_command_ns_ = last_command_ns_;
+    }
     applied_ = c;
     write_command(n, applied_, command);
     ++commands_applied_;
@@ -323,6 +340,7 @@ class BusPlant final : public ExternalDriver,
   std::int64_t last_sample_ = -1, last_command_step_ = 0, sent_ns_ = 0;
   std::int64_t commands_applied_ = 0, stale_samples_ = 0, timeouts_ = 0, safe_steps_ = 0, longest_gap_steps_ = 0;
   std::int64_t saturated_ = 0, waits_timed_out_ = 0, safe_since_step_ = 0, last_step_ = 0;
+  std::int64_t first_command_ns_ = 0, last_command_ns_ = 0;  // lockstep: the exchange's span
   const std::atomic<int>* stop_ = nullptr;  // ends a wait (start-up, lockstep) when non-zero
   std::string attach_error_;
   std::int64_t io_ns_ = 0;  // real time: the hooks' time since take_io_ns

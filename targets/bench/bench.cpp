@@ -189,6 +189,7 @@ int ehpt::cli::cmd_bench(const std::vector<std::string>& args) {
       {{"lockstep_lcm", "lockstep, LCM udpm (unshare -n)", "built_in_ecu"}},
       {{"batch_can", "as fast as possible, CAN codec", "can_codec"}},
       {{"lockstep_socketcand", "lockstep, socketcand", "can_codec"}},
+      {{"lockstep_pycan", "lockstep, socketcand, python-can ECU (psecu2_nedc)", "exchange"}},
       {{"wallclock_socketcand", "wall clock, socketcand", "wall_clock_session"}},
       {{"replay", "its replay (ehpt replay)", "wall_clock_session"}}};
   for (const auto& [name, label, group] : runs) {

@@ -103,7 +103,7 @@ inline constexpr const char* kBenchFormat = "ehpt bench, version 1";
 // The scenario of (c), (d) and (e): the map EV on Sort1, which moves from t = 0 (NEDC stands
 // still for its first 11 s, so a 5 s run would compare trajectories of a car at rest).
 inline constexpr const char* kRtScenario = "ev_sort1";
-inline const std::vector<std::string> kRunDirs = {"batch_1",  "batch_2", "batch_can", "realtime", "lockstep_socketcand",
+inline const std::vector<std::string> kRunDirs = {"batch_1",  "batch_2", "batch_can", "realtime", "lockstep_socketcand", "lockstep_pycan",
                                            "lockstep_lcm", "wallclock_socketcand", "replay"};
 
 }  // namespace ehpt::bench

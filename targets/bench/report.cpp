@@ -159,6 +159,27 @@ std::string report_text(const Bench& b) {
   rows.push_back({"ehpt ecu (the ECU's process)", "-", "-", "", "not reported (ehpt ecu writes no summary)"});
   s += table({"process", "allocations", "peak RSS MB", "target", ""}, rows, "lrrrl");
 
+  // the lockstep exchange's own rate (from the first command to the last)
+  s += "\n    the lockstep exchange over socketcand on 127.0.0.1: samples answered per second and the round trip\n"
+       "    (sensor frames out -> the sample's command in), from each run's summary.json bus\n";
+  rows.clear();
+  const std::vector<std::array<std::string, 3>> exchange_rows = {
+      {"lockstep_socketcand", "ehpt ecu, " + std::string(kRtScenario), "-"},
+      {"lockstep_pycan", "tools/pycan_ecu.py (python-can 4.1, Nagle on), psecu2_nedc", ">= 2000"}};
+  for (const auto& [name, label, target] : exchange_rows) {
+    for (const auto& r : b.runs) {
+      if (r.name != name) continue;
+      if (!r.ok()) {
+        rows.push_back({label, "-", "-", "-", target, r.status});
+      } else {
+        rows.push_back({label, fmt("%.0f", r.samples_per_s), fmt("%.0f", r.round_trip_p50_us),
+                        fmt("%.0f", r.round_trip_p99_us), target,
+                        target == "-" ? "" : target_mark(r.samples_per_s >= 2000.0)});
+      }
+    }
+  }
+  s += table({"ECU", "samples/s", "round trip p50 us", "p99 us", "target", ""}, rows, "lrrrrl");
+
   // (e)
   s += "\n(e) determinism: " + std::string(kRtScenario) + ", " + std::to_string(b.seconds) + " s (the wall-clock session " +
        fmt("%.0f", b.wall_clock_s) + " s); trajectory_hash: FNV-1a over every recorded value\n";
@@ -222,6 +243,11 @@ ehpt::io::JsonObject run_json(const SubRun& r) {
       j.null("heap_allocations_after_startup");
     }
     j.number("peak_rss_MB", r.peak_rss_MB);
+    if (std::isfinite(r.samples_per_s)) {
+      j.number("samples_per_s", r.samples_per_s);
+      j.number("round_trip_p50_us", r.round_trip_p50_us);
+      j.number("round_trip_p99_us", r.round_trip_p99_us);
+    }
   }
   j.number("wall_time_s", r.wall_s);
   return j;

@@ -3,6 +3,12 @@
 #include "targets/bench/sections.hpp"
 #include "targets/bench/supervisor.hpp"
 
+#include <unistd.h>
+
+#include <functional>
+
+#include "hil/config/scenario.hpp"
+
 namespace ehpt::bench {
 
 namespace {
@@ -26,21 +32,28 @@ void batch_run(Bench& b, const std::string& name, const std::vector<std::string>
   take_summary(r, j);
 }
 
-// ehpt plant + ehpt ecu over socketcand on 127.0.0.1 (lockstep, or the wall clock).
-void socketcand_run(Bench& b, const std::string& name, bool lockstep, double seconds) {
+// The ECU's command line for a plant listening on 127.0.0.1:port.
+using EcuArgv = std::function<std::vector<std::string>(int port)>;
+
+// ehpt plant + an ECU over socketcand on 127.0.0.1 (lockstep, or the wall clock): by default
+// ehpt ecu on the scenario of (d) and (e).
+void socketcand_run(Bench& b, const std::string& name, bool lockstep, double seconds, const char* scenario = kRtScenario,
+                    const EcuArgv& ecu_argv = nullptr) {
   SubRun& r = b.run(name);
   const auto t0 = Clock::now();
   for (int attempt = 0; attempt < 3 && !stopping(); ++attempt) {
     const int port = free_port();
     if (port <= 0) return fail(b, r, "no free TCP port on 127.0.0.1");
     const std::string bus = "socketcand:127.0.0.1:" + std::to_string(port);
-    std::vector<std::string> plant = {b.exe, "plant", kRtScenario, "--bus", bus, "--out", b.dir + "/" + name, "--quiet",
+    std::vector<std::string> plant = {b.exe, "plant", scenario, "--bus", bus, "--out", b.dir + "/" + name, "--quiet",
                                       "--ecu-wait-s", "30"};
     if (lockstep) plant.push_back("--lockstep");
-    std::vector<std::string> ecu = {b.exe, "ecu", kRtScenario, "--bus", bus, "--quiet", "--idle-timeout-s", "10"};
+    std::vector<std::string> ecu = ecu_argv ? ecu_argv(port)
+                                            : std::vector<std::string>{b.exe, "ecu", scenario, "--bus", bus, "--quiet",
+                                                                       "--idle-timeout-s", "10"};
     for (const auto& a : b.duration_set(seconds)) {
       plant.push_back(a);
-      ecu.push_back(a);
+      if (!ecu_argv) ecu.push_back(a);
     }
     Child p, e;
     std::string why;
@@ -77,7 +90,8 @@ void socketcand_run(Bench& b, const std::string& name, bool lockstep, double sec
     }
     if (eo.code != 0 || eo.timed_out) {
       const std::string line = last_line(b.logs + "/" + name + "_ecu.err");
-      return fail(b, r, "ehpt ecu: exit " + std::to_string(eo.code) + (line.empty() ? "" : ": " + line));
+      return fail(b, r, (ecu_argv ? "the ECU" : "ehpt ecu") + std::string(": exit ") + std::to_string(eo.code) +
+                            (line.empty() ? "" : ": " + line));
     }
     Json j;
     if (!read_summary(b.dir + "/" + name, b.started_at, j, why)) return fail(b, r, why);
@@ -188,7 +202,32 @@ bool read_summary(const std::string& dir, std::time_t since, Json& j, std::strin
   return true;
 }
 
+// A stock python-can 4.1 ECU written the obvious way (tools/pycan_ecu.py: socketcand, two
+// command frames per sample, Nagle left on) driving PSecu2 in lockstep: the rate a user's own
+// python-can ECU gets. Not run where the tool or python3-can is missing (said so, not failed).
+void pycan_run(Bench& b) {
+  SubRun& r = b.run("lockstep_pycan");
+  const std::string tool = ehpt::hil::tools_dir() + "/pycan_ecu.py";
+  if (access(tool.c_str(), R_OK) != 0) {
+    r.status = "not run: " + tool + " not found";
+    return;
+  }
+  const Outcome probe = run_child({"/usr/bin/python3", "-c", "import can"}, b.logs, "lockstep_pycan_probe", 30.0);
+  if (!probe.ok()) {
+    r.status = "not run: /usr/bin/python3 cannot import can (apt-get install python3-can)";
+    return;
+  }
+  socketcand_run(b, "lockstep_pycan", true, b.seconds, "psecu2_nedc", [tool](int port) {
+    return std::vector<std::string>{"/usr/bin/python3", tool, "--vehicle", "psd", "--interface", "socketcand",
+                                    "--host", "127.0.0.1", "--port", std::to_string(port), "--channel", "can0",
+                                    "--idle-timeout", "10"};
+  });
+}
+
 void take_summary(SubRun& r, const Json& j) {
+  r.samples_per_s = json_num(j, "bus.samples_per_s");
+  r.round_trip_p50_us = json_num(j, "bus.round_trip_us.p50");
+  r.round_trip_p99_us = json_num(j, "bus.round_trip_us.p99");
   r.hash = json_str(j, "trajectory_hash");
   const double allocations = json_num(j, "heap_allocations_after_startup");
   r.allocations_reported = std::isfinite(allocations);
@@ -199,12 +238,13 @@ void take_summary(SubRun& r, const Json& j) {
 
 void section_runs(Bench& b) {
   b.progress("(d, e) determinism and allocations: " + std::string(kRtScenario) + ", " + std::to_string(b.seconds) +
-             " s as fast as possible (x3), lockstep over socketcand and LCM; a " + fmt("%.0f", b.wall_clock_s) +
+             " s as fast as possible (x3), lockstep over socketcand (ehpt ecu, and a python-can ECU on psecu2_nedc) and LCM; a " + fmt("%.0f", b.wall_clock_s) +
              " s wall-clock session over socketcand and its replay (about " + fmt("%.0f", b.wall_clock_s + 5.0) + " s)");
   batch_run(b, "batch_1", {});
   if (!stopping()) batch_run(b, "batch_2", {});
   if (!stopping()) batch_run(b, "batch_can", {"--set", "vehicle.ecu.codec=can"});
   if (!stopping()) socketcand_run(b, "lockstep_socketcand", true, b.seconds);
+  if (!stopping()) pycan_run(b);
   if (!stopping()) lcm_run(b);
   if (!stopping()) socketcand_run(b, "wallclock_socketcand", false, b.wall_clock_s);
   if (!stopping()) replay_run(b);

@@ -48,6 +48,8 @@ struct SubRun {
   bool allocations_reported = false;
   double peak_rss_MB = NAN;
   double wall_s = NAN;
+  // lockstep bus runs: the exchange's rate and round trip (summary.json bus.*)
+  double samples_per_s = NAN, round_trip_p50_us = NAN, round_trip_p99_us = NAN;
   bool ok() const { return status == "ok"; }
   bool failed() const { return status.rfind("failed", 0) == 0; }
 };

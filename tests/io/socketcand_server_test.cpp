@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The socketcand server (io/can/socketcand.hpp) on 127.0.0.1: eight clients that connect and
-// never finish their handshake cannot lock an ECU out; their slots are freed after 5 s.
+// never finish their handshake cannot lock an ECU out; their slots are freed after 5 s; the
+// session ends with an orderly close.
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
@@ -8,7 +9,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cerrno>
 #include <chrono>
+#include <cstring>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -108,6 +112,66 @@ TEST(SocketcandClient, GivesUpAtItsTimeoutWhenNothingListens) {
       << error;
   EXPECT_GT(waited_s, 0.4);  // it tried again until its timeout
   EXPECT_LT(waited_s, 3.0);  // and no longer
+}
+
+// Reads from fd until text holds want (or 3 s pass); what was read.
+std::string read_until(int fd, const std::string& want) {
+  std::string text;
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(3);
+  char buf[512];
+  while (text.find(want) == std::string::npos && std::chrono::steady_clock::now() < until) {
+    const ssize_t n = ::recv(fd, buf, sizeof buf, MSG_DONTWAIT);
+    if (n > 0) text.append(buf, static_cast<std::size_t>(n));
+    if (n <= 0) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return text;
+}
+
+// The session's end is an orderly close: the client reads to the end of the stream (recv 0),
+// never a reset, even with frames it sent that the server never read (closing a socket with
+// unread bytes would send an RST: python-can clients and loggers raise ConnectionResetError).
+TEST(SocketcandServer, TheSessionEndsWithAnOrderlyCloseNotAReset) {
+  const std::uint16_t port = free_port();
+  std::string error;
+  auto server = open_socketcand_server("127.0.0.1", port, error);
+  ASSERT_TRUE(server) << error;
+  const int fd = connect_to(port);
+  Frame none[4];
+  server->receive(none);  // accepts it: "< hi >"
+  ASSERT_NE(read_until(fd, "< hi >").find("< hi >"), std::string::npos);
+  const std::string open = "< open can0 >", raw = "< rawmode >";
+  ASSERT_EQ(::send(fd, open.data(), open.size(), 0), static_cast<ssize_t>(open.size()));
+  for (int i = 0; i < 20 && !server->has_peer(); ++i) {
+    server->wait(10'000'000);
+    server->receive(none);
+    if (read_until(fd, "< ok >").find("< ok >") != std::string::npos) break;
+  }
+  ASSERT_EQ(::send(fd, raw.data(), raw.size(), 0), static_cast<ssize_t>(raw.size()));
+  for (int i = 0; i < 100 && !server->has_peer(); ++i) {
+    server->wait(10'000'000);
+    server->receive(none);
+  }
+  ASSERT_TRUE(server->has_peer());
+  // frames the server will never read: unread bytes in its socket at the end
+  const std::string frames = "< send 123 1 AA > < send 124 2 BB CC > ";
+  ASSERT_EQ(::send(fd, frames.data(), frames.size(), 0), static_cast<ssize_t>(frames.size()));
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  // the server ends in a thread (it waits for our side's end); we read to the end and close
+  std::thread ending([&] { server.reset(); });
+  bool eof = false;
+  int reset_errno = 0;
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(3);
+  char buf[512];
+  while (!eof && reset_errno == 0 && std::chrono::steady_clock::now() < until) {
+    const ssize_t n = ::recv(fd, buf, sizeof buf, MSG_DONTWAIT);
+    if (n == 0) eof = true;
+    if (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) reset_errno = errno;
+    if (n < 0) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  ::close(fd);
+  ending.join();
+  EXPECT_EQ(reset_errno, 0) << std::strerror(reset_errno);  // ECONNRESET without the orderly close
+  EXPECT_TRUE(eof);
 }
 
 }  // namespace
