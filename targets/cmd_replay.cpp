@@ -2,6 +2,7 @@
 // `ehpt replay`: a recorded bus session again, offline, compared bit for bit.
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
@@ -22,6 +23,24 @@ namespace ehpt::cli {
 
 namespace {
 
+// "" if the replay may write into out_dir, else why not: a replay never writes into the
+// session it reads (nor into a folder inside it), nor into any other recorded session (a
+// folder with inputs.log: only 'ehpt plant' writes one). Both would replace the session's
+// files, the only record of what its ECU sent.
+std::string refuse_out_dir(const std::string& out_dir, const std::string& session_dir) {
+  std::error_code ec;
+  const fs::path out = fs::weakly_canonical(fs::absolute(out_dir, ec), ec);
+  const fs::path session = fs::weakly_canonical(fs::absolute(session_dir.empty() ? "." : session_dir, ec), ec);
+  const auto [end, rest] = std::mismatch(session.begin(), session.end(), out.begin(), out.end());
+  if (end == session.end()) {
+    return out == session ? "is the session folder the replay reads" : "is inside the session folder the replay reads";
+  }
+  if (fs::exists(out / ehpt::hil::kInputsLogName, ec)) {
+    return "holds a recorded bus session (its " + std::string(ehpt::hil::kInputsLogName) + ")";
+  }
+  return "";
+}
+
 const char* kReplayHelp =
     "usage: ehpt replay RUN_DIR [--out DIR] [--quiet]\n"
     "\n"
@@ -33,7 +52,8 @@ const char* kReplayHelp =
     "with the session's summary.json: equal means bit for bit the same trajectory (exit 0);\n"
     "a difference (the scenario's files changed since) is exit 1.\n"
     "  RUN_DIR          the session's output folder (or its inputs.log)\n"
-    "  --out DIR        output folder (default out/<scenario name>_replay)\n"
+    "  --out DIR        output folder (default out/<scenario name>_replay); never the\n"
+    "                   session's folder, a folder inside it or another recorded session\n"
     "  --quiet          print nothing but errors\n";
 
 // A top-level member of a summary.json as text: a string's value, a number's text; "" if
@@ -127,6 +147,11 @@ int cmd_replay(const std::vector<std::string>& args) {
   const std::unique_ptr<ehpt::hil::ExternalDriver> driver = ehpt::hil::make_replay_driver(log, log_path);
   ehpt::hil::BatchOptions opt;
   opt.out_dir = out_dir.empty() ? "out/" + sc.name + "_replay" : out_dir;
+  if (const std::string why = refuse_out_dir(opt.out_dir, session_dir); !why.empty()) {
+    std::cerr << "error: --out " << opt.out_dir << " " << why
+              << ": a replay never writes there (the session's files are its only record); give another --out\n";
+    return 2;
+  }
   opt.progress = !quiet && isatty(STDERR_FILENO);
   opt.stop_signal = &g_stop;
   opt.driver = driver.get();

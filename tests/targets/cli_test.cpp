@@ -1202,6 +1202,46 @@ std::string hash_of(const std::string& summary) {
 
 // A wall-clock and a real-time session on the bus, each replayed offline: the same
 // trajectory bit for bit (hash and timeseries.csv); an interrupted session too.
+// A replay never writes into the session it reads, a folder inside it, or another recorded
+// session: each is refused (exit 2) before anything runs, and every file there is unchanged.
+TEST(CliReplay, NeverWritesIntoASessionFolder) {
+  const fs::path root = fresh("replay_guard");
+  const std::string scenario = ehpt::test::source_path("scenarios/ev_sort1.toml");
+  const std::string a = (root / "a").string(), b = (root / "b").string();
+  ASSERT_EQ(bus_session(scenario, a, {"--set", "solver.duration_s=1"}, "guard_a", 0, {}).exit_code, 0);
+  ASSERT_EQ(bus_session(scenario, b, {"--set", "solver.duration_s=1"}, "guard_b", 0, {}).exit_code, 0);
+  const auto files_of = [](const std::string& dir) {
+    std::map<std::string, std::string> files;
+    for (const auto& e : fs::recursive_directory_iterator(dir)) {
+      if (e.is_regular_file()) files[e.path().string()] = slurp(e.path().string());
+    }
+    return files;
+  };
+  const auto before_a = files_of(a), before_b = files_of(b);
+  ASSERT_TRUE(before_a.count(a + "/inputs.log") && before_a.count(a + "/bus.log"));
+  struct Case {
+    std::string out, says;
+  };
+  for (const Case& c : std::vector<Case>{{a, "is the session folder the replay reads"},
+                                         {a + "/", "is the session folder the replay reads"},
+                                         {root.string() + "/./a", "is the session folder the replay reads"},
+                                         {a + "/replay", "is inside the session folder the replay reads"},
+                                         {b, "holds a recorded bus session (its inputs.log)"}}) {
+    const Result r = ehpt_argv({"replay", a, "--out", c.out});
+    EXPECT_EQ(r.exit_code, 2) << c.out << r.out;
+    EXPECT_HAS(r.err, "error: --out " + c.out + " " + c.says + ": a replay never writes there");
+    EXPECT_EQ(r.out.find("bit-identical"), std::string::npos) << c.out;
+  }
+  // the default folder is refused too when a session sits there
+  const Result in_place = ehpt_argv({"replay", a + "/inputs.log", "--out", a});
+  EXPECT_EQ(in_place.exit_code, 2);
+  EXPECT_TRUE(files_of(a) == before_a) << "the session's files changed";
+  EXPECT_TRUE(files_of(b) == before_b) << "the other session's files changed";
+  EXPECT_FALSE(fs::exists(a + "/replay"));
+  // and a folder of its own works
+  EXPECT_EQ(ehpt_argv({"replay", a, "--out", (root / "own").string(), "--quiet"}).exit_code, 0);
+}
+
 TEST(CliReplay, ARecordedSessionReplaysBitForBit) {
   const fs::path root = fresh("replay");
   struct Case {
