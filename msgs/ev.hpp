@@ -4,6 +4,8 @@
 // is part of the plant, as the person at the wheel; the ECU turns the driver's request into
 // the drive's torque reference (the built-in ECU, ecu::EvFollower, passes it on).
 
+#include <cmath>
+
 #include "msgs/stamp.hpp"
 
 namespace ehpt::msgs {
@@ -29,5 +31,8 @@ struct EvCommand {
   Stamp stamp;
   double driveTauRef_Nm = 0.0;  // torque asked of the drive (the limiter may cut it)
 };
+
+// Every number of the command is finite (msgs/psd.hpp all_finite: why).
+inline bool all_finite(const EvCommand& c) { return std::isfinite(c.driveTauRef_Nm); }
 
 }  // namespace ehpt::msgs

@@ -3,6 +3,8 @@
 // Messages of the power-split hybrid (MODELS.md §0.5; P15 §5.2): names as in the library's
 // bus ("Conn"), with the unit appended.
 
+#include <cmath>
+
 #include "msgs/stamp.hpp"
 
 namespace ehpt::msgs {
@@ -39,5 +41,12 @@ struct PsdCommand {
   double motTauRef_Nm = 0.0;  // torque asked of mot
   bool iceON = true;          // engine on (ON/OFF engines only)
 };
+
+// Every number of the command is finite: a command with a NaN or an infinity is refused by
+// each way in (LCM, the Python module; CAN cannot carry one), never applied.
+inline bool all_finite(const PsdCommand& c) {
+  return std::isfinite(c.icePowRef_W) && std::isfinite(c.iceTauRef_Nm) && std::isfinite(c.genTauRef_Nm) &&
+         std::isfinite(c.motTauRef_Nm);
+}
 
 }  // namespace ehpt::msgs

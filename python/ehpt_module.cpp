@@ -869,10 +869,18 @@ class PySimulation {
   }
 
   void write_command(const CommandArg& cmd) {
+    // a NaN or an infinity is refused, never applied (as over LCM; CAN cannot carry one)
+    const auto refuse_non_finite = [&](bool finite) {
+      if (!finite) raise_error(sc_.name + ": write_command(command): a number of the command is not finite (NaN or inf); not applied");
+    };
     if (family_ == Family::kPsd && py::isinstance<msgs::PsdCommand>(cmd)) {
-      sim().write_command(cmd.cast<const msgs::PsdCommand&>());
+      const auto& c = cmd.cast<const msgs::PsdCommand&>();
+      refuse_non_finite(msgs::all_finite(c));
+      sim().write_command(c);
     } else if (family_ == Family::kEv && py::isinstance<msgs::EvCommand>(cmd)) {
-      sim().write_command(cmd.cast<const msgs::EvCommand&>());
+      const auto& c = cmd.cast<const msgs::EvCommand&>();
+      refuse_non_finite(msgs::all_finite(c));
+      sim().write_command(c);
     } else {
       const char* wanted = family_ == Family::kPsd ? "an ehpt.PsdCommand" : family_ == Family::kEv ? "an ehpt.EvCommand" : "none (a rig has no ECU)";
       wrong_type(sc_.name + ": write_command(command): command", wanted, cmd);

@@ -4,7 +4,8 @@
 // --help, loading a scenario with its messages, the real-time options, and the commands'
 // entry points (one file each: targets/cmd_*.cpp, targets/bench/, dispatched by
 // targets/ehpt_main.cpp). Exit codes: 0 ok, 1 usage / output / system error, 2 bad input
-// (nothing was run), 3 run-time fault (outputs kept), 128 + N stopped by signal N.
+// (nothing was run), 3 run-time fault (outputs kept), 4 degraded bus session (outputs kept),
+// 128 + N stopped by signal N.
 
 #include <atomic>
 #include <cstddef>

@@ -29,7 +29,8 @@ namespace {
 
 const char* kPlantHelp =
     "usage: ehpt plant SCENARIO --bus SPEC [--lockstep] [--out DIR] [--set key=value ...]\n"
-    "                  [--command-timeout-s T] [--lockstep-wait-s W] [--ecu-wait-s S] [--quiet]\n"
+    "                  [--command-timeout-s T] [--lockstep-wait-s W] [--ecu-wait-s S]\n"
+    "                  [--allow-degraded] [--quiet]\n"
     "                  [--realtime [--period T] [--cpu N] [--priority P]]\n"
     "\n"
     "Runs the scenario's plant without its built-in ECU: an ECU on the bus reads the sensor\n"
@@ -46,12 +47,17 @@ const char* kPlantHelp =
     "  --command-timeout-s T  a command older than T puts the plant in its safe state (torques\n"
     "                   zero, engine ON/OFF held, ecuTimeout in PlantStatus); default 3 ECU periods\n"
     "  --lockstep-wait-s W    lockstep: wall time to wait for a command before going on\n"
-    "                   without one (it then ages towards the timeout); default 1\n"
+    "                   without one (it then ages towards the timeout); default 1; after 10\n"
+    "                   waits in a row run out the plant stops waiting until a command comes\n"
     "  --ecu-wait-s S   wall time to wait for an ECU to connect before t = 0; default 60\n"
     "  --realtime, --period, --cpu, --priority  the real-time loop, as for 'ehpt run' (instead\n"
     "                   of the plain wall clock; not with --lockstep)\n"
+    "  --allow-degraded exit 0 for a degraded session (its status stays \"degraded\")\n"
     "  --out, --set, --quiet  as for 'ehpt run'\n"
-    "A fault holds the run (reported in PlantStatus) and ends it with exit 3.\n";
+    "A fault holds the run (reported in PlantStatus) and ends it with exit 3. A session that\n"
+    "ran without its ECU is \"degraded\" (summary.json status and degraded, the last line,\n"
+    "exit 4): no command at all, commands that timed out, lockstep waits that ran out, error\n"
+    "frames, frames the plant could not send.\n";
 
 const char* kEcuHelp =
     "usage: ehpt ecu SCENARIO --bus SPEC [--set key=value ...] [--idle-timeout-s S]\n"
@@ -82,7 +88,7 @@ bool parse_positive(const std::string& option, const std::string& text, double& 
 struct BusArgs {
   std::string scenario, out_dir, bus, lcm_prefix = "EHPT_";
   std::vector<std::string> sets;
-  bool lockstep = false, quiet = false;
+  bool lockstep = false, quiet = false, allow_degraded = false;
   double command_timeout_s = 0.0, lockstep_wait_s = 1.0, ecu_wait_s = 60.0, idle_timeout_s = 10.0, max_samples = 0.0;
   // --bus, checked: an LCM URL, or a CAN transport
   bool lcm = false;
@@ -126,6 +132,8 @@ int parse_bus_args(const std::vector<std::string>& args, bool plant, const char*
       }
     } else if (plant && o == "--lockstep") {
       a.lockstep = true;
+    } else if (plant && o == "--allow-degraded") {
+      a.allow_degraded = true;
     } else if (plant && o == "--command-timeout-s") {
       if (!parse_positive(o, args[++i], a.command_timeout_s)) return 1;
     } else if (plant && o == "--lockstep-wait-s") {
@@ -235,6 +243,7 @@ int cmd_plant(const std::vector<std::string>& args) {
   opt.progress = !a.quiet && isatty(STDERR_FILENO);
   opt.stop_signal = &g_stop;
   opt.driver = driver.get();
+  opt.allow_degraded = a.allow_degraded;
   if (a.rt.realtime) opt.realtime = &a.rt.opt;
   const ehpt::hil::BatchResult r = ehpt::hil::run_batch(sc, opt, std::cerr);
   if (!a.quiet) {
@@ -246,7 +255,16 @@ int cmd_plant(const std::vector<std::string>& args) {
     if (!r.results_dir.empty()) {
       text += "outputs       " + r.results_dir + "/timeseries.csv, summary.json" + (a.lcm ? "" : ", bus.log") + "\n";
     }
+    // the last line: a session without its ECU did not do its job, whatever the rest says
+    if (!r.degraded.empty()) {
+      text += "DEGRADED      ";
+      for (std::size_t k = 0; k < r.degraded.size(); ++k) text += (k ? "; " : "") + r.degraded[k];
+      text += "\n";
+    }
     printed = out(text);
+  }
+  if (!r.degraded.empty() && r.exit_code == ehpt::hil::kExitDegraded) {
+    std::cerr << "error: the session is degraded (exit 4; --allow-degraded accepts it): " << r.degraded.front() << "\n";
   }
   if (r.exit_code != 0) return r.exit_code;
   return printed ? 0 : 1;

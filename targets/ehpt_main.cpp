@@ -8,7 +8,7 @@
 //   ehpt signals SCENARIO
 //   ehpt plot DIR
 // Exit codes: 0 ok, 1 usage / output / system error (out of memory), 2 bad input (nothing
-// was run), 3 run-time fault (outputs kept), 128 + N stopped by signal N (130 SIGINT,
+// was run), 3 run-time fault (outputs kept), 4 degraded bus session, 128 + N stopped by signal N (130 SIGINT,
 // 143 SIGTERM, 129 SIGHUP; outputs so far kept and committed).
 //
 // One file per command: targets/cmd_*.cpp, targets/bench/ (ehpt bench), targets/cmd_sweep.cpp;
@@ -68,8 +68,8 @@ const char* kMainHelp =
     "\n"
     "'ehpt <command> --help' gives the options of a command.\n"
     "Exit codes: 0 ok, 1 usage, output or system error, 2 bad input (nothing run), 3 run-time\n"
-    "fault (outputs kept), 128+N stopped by signal N: 130 Ctrl-C, 143 SIGTERM, 129 SIGHUP\n"
-    "(outputs so far kept).\n";
+    "fault (outputs kept), 4 a degraded bus session (no ECU, timeouts, bus errors; outputs\n"
+    "kept), 128+N stopped by signal N: 130 Ctrl-C, 143 SIGTERM, 129 SIGHUP (outputs so far kept).\n";
 
 int dispatch(std::vector<std::string> args) {
   if (args.empty()) {

@@ -88,7 +88,9 @@ class BusPlant final : public ExternalDriver,
     if (n == last_sample_) return false;
     const IoTime io(*this);
     send_sample(s, n);
-    return opt_.lockstep && wait_for_command(n, command);
+    if (!opt_.lockstep) return false;
+    if (gave_up_waiting_) return drain(n, command);  // no wait: the ECU is gone (see kMaxConsecutiveWaits)
+    return wait_for_command(n, command);
   }
   // (c) The staleness check (lockstep: at its samples and where the held command times out).
   bool before_step(std::int64_t n, Command& command) override {
@@ -127,6 +129,29 @@ class BusPlant final : public ExternalDriver,
 
   CommandSource command_source() const override {
     return {"external", "external ECU over " + wire_.describe() + ", " + pacing(), {}};
+  }
+
+  std::vector<std::string> degraded_reasons() const override {
+    std::vector<std::string> why;
+    const auto count = [](std::int64_t n, const char* one, const char* many) {
+      return std::to_string(n) + " " + (n == 1 ? one : many);
+    };
+    if (commands_applied_ == 0) {
+      why.push_back("no ECU: not one command in the whole session (none connected, or it never answered)");
+    }
+    if (timeouts_ > 0) {
+      why.push_back("the ECU's commands timed out " + count(timeouts_, "time", "times") + ": " +
+                    io::number_text(static_cast<double>(safe_steps()) * h_s_) + " s in the safe state");
+    }
+    if (waits_timed_out_ > 0) {
+      why.push_back(count(waits_timed_out_, "lockstep wait", "lockstep waits") + " for the ECU timed out" +
+                    (gave_up_at_step_ >= 0 ? "; the plant stopped waiting at t = " +
+                                                 io::number_text(static_cast<double>(gave_up_at_step_) * h_s_) + " s after " +
+                                                 std::to_string(kMaxConsecutiveWaits) + " in a row"
+                                           : ""));
+    }
+    wire_.degraded_reasons(why);
+    return why;
   }
 
   void report(io::JsonObject& summary, std::string& text) const override {
@@ -186,6 +211,11 @@ class BusPlant final : public ExternalDriver,
   }
 
  private:
+  // Lockstep: after this many waits in a row ran out the plant stops waiting (it runs on in
+  // the safe state, taking any command that comes, and waits again once one does): an ECU
+  // that never came, or died, must not make NEDC take 33 h at one sample per wait.
+  static constexpr int kMaxConsecutiveWaits = 10;
+
   static double us(std::int64_t ns) { return static_cast<double>(ns) / 1000.0; }
   double exchange_s() const { return static_cast<double>(last_command_ns_ - first_command_ns_) * 1e-9; }
   double samples_per_s() const {
@@ -249,11 +279,18 @@ class BusPlant final : public ExternalDriver,
     for (;;) {
       if (drain(n, command)) {
         round_trip_.record(clock_.now_ns() - sent_ns_);
+        consecutive_waits_ = 0;
         return true;
       }
       const std::int64_t left = deadline - clock_.now_ns();
       if (left <= 0 || stopped()) {
-        waits_timed_out_ += count ? 1 : 0;
+        if (count && left <= 0) {
+          ++waits_timed_out_;
+          if (++consecutive_waits_ >= kMaxConsecutiveWaits && !gave_up_waiting_) {
+            gave_up_waiting_ = true;
+            gave_up_at_step_ = n;
+          }
+        }
         return false;
       }
       wire_.wait(std::min<std::int64_t>(left, 50'000'000));
@@ -303,6 +340,8 @@ class BusPlant final : public ExternalDriver,
     last_command_step_ = n;
     if (safe_) safe_steps_ += n - safe_since_step_;  // fresh commands end the safe state
     safe_ = false;
+    consecutive_waits_ = 0;
+    gave_up_waiting_ = false;  // it is back: lockstep waits for it again
   }
 
   // The first step at which the held command is older than the timeout.
@@ -341,6 +380,9 @@ class BusPlant final : public ExternalDriver,
   std::int64_t commands_applied_ = 0, stale_samples_ = 0, timeouts_ = 0, safe_steps_ = 0, longest_gap_steps_ = 0;
   std::int64_t saturated_ = 0, waits_timed_out_ = 0, safe_since_step_ = 0, last_step_ = 0;
   std::int64_t first_command_ns_ = 0, last_command_ns_ = 0;  // lockstep: the exchange's span
+  int consecutive_waits_ = 0;        // lockstep waits that ran out since the last command
+  bool gave_up_waiting_ = false;     // kMaxConsecutiveWaits reached: no more waits until a command
+  std::int64_t gave_up_at_step_ = -1;
   const std::atomic<int>* stop_ = nullptr;  // ends a wait (start-up, lockstep) when non-zero
   std::string attach_error_;
   std::int64_t io_ns_ = 0;  // real time: the hooks' time since take_io_ns

@@ -9,6 +9,7 @@
 #include <ctime>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "hil/bus/bus_family.hpp"
 #include "io/can/candump_log.hpp"
@@ -124,6 +125,16 @@ class CanWire {
     b.integer("peers_connected", tc.peers_connected);
     b.integer("peers_lost", tc.peers_lost);
     rejected = rx.unknown_id + rx.wrong_length + rx.bad_counter + rx.out_of_range + rx.stale + tc.rx_malformed;
+  }
+  // Why the bus itself degraded the session (ExternalDriver::degraded_reasons).
+  void degraded_reasons(std::vector<std::string>& why) const {
+    const io::can::TransportCounters& tc = bus_.counters();
+    if (tc.error_frames > 0) {
+      why.push_back(std::to_string(tc.error_frames) + " error frames or protocol errors on the bus");
+    }
+    if (tc.send_dropped > 0) {
+      why.push_back(std::to_string(tc.send_dropped) + " frames the plant could not send (no ECU connected, or one too slow)");
+    }
   }
   std::int64_t messages_in() const { return bus_.counters().frames_in; }
   std::int64_t messages_out() const { return bus_.counters().frames_out; }

@@ -85,9 +85,16 @@ class LcmWire {
     rej.integer("malformed", malformed_);
     rej.integer("stale", stale_);
     rej.integer("repeated", repeated_);
+    rej.integer("non_finite", non_finite_);
     b.object("rejected", rej);
     b.integer("send_dropped", bus_.counters().publish_failed);
-    rejected = malformed_ + stale_ + repeated_;
+    rejected = malformed_ + stale_ + repeated_ + non_finite_;
+  }
+  // Why the bus itself degraded the session (ExternalDriver::degraded_reasons).
+  void degraded_reasons(std::vector<std::string>& why) const {
+    if (bus_.counters().publish_failed > 0) {
+      why.push_back(std::to_string(bus_.counters().publish_failed) + " messages the plant could not publish");
+    }
   }
   std::int64_t messages_in() const { return bus_.counters().received; }
   std::int64_t messages_out() const { return bus_.counters().published; }
@@ -113,10 +120,14 @@ class LcmWire {
       ++self->stale_;  // more fresh commands in one drain than the buffer holds: this one waits no more
       return;
     }
-    self->last_step_ = m.step;
-    ++self->accepted_;
     Command c{};
     io::lcm::from_lcm(m, c);
+    if (!msgs::all_finite(c)) {  // +inf, -inf, NaN: never applied (CAN cannot carry one at all)
+      ++self->non_finite_;
+      return;
+    }
+    self->last_step_ = m.step;
+    ++self->accepted_;
     self->pending_[self->pending_count_++] = c;
   }
 
@@ -128,7 +139,7 @@ class LcmWire {
   std::int64_t sample_step_ = 0, max_age_steps_ = 0, last_step_ = -1;
   std::array<Command, 16> pending_{};
   std::size_t pending_count_ = 0;
-  std::int64_t accepted_ = 0, malformed_ = 0, stale_ = 0, repeated_ = 0;
+  std::int64_t accepted_ = 0, malformed_ = 0, stale_ = 0, repeated_ = 0, non_finite_ = 0;
 };
 
 }  // namespace ehpt::hil

@@ -468,11 +468,13 @@ std::string realtime_text(const RealtimeRun& rt) {
 }
 
 io::JsonObject summary_json(const Scenario& sc, const Report& r, const std::vector<std::string>& warnings,
-                            const CommandSource& commands) {
+                            const CommandSource& commands, const std::vector<std::string>& degraded) {
   io::JsonObject j;
   const RunStats& st = r.st;
   const MetricTotals& mt = r.mt;
-  j.text("status", r.status);
+  // a status is a claim: a session that ran to its end without its ECU did not do its job
+  j.text("status", r.status == "ok" && !degraded.empty() ? "degraded" : r.status);
+  if (!degraded.empty()) j.strings("degraded", degraded);
   if (st.fault != 0) {
     j.text("fault", fault_text(st.fault) + " at t = " + io::number_text(st.fault_time_s) + " s (step " +
                         std::to_string(st.fault_step) + ")");
@@ -614,7 +616,8 @@ void conclude(const Scenario& sc, const Report& r, const ExternalDriver* driver,
   }
   std::vector<std::string> warnings = sc.warnings;
   warnings.insert(warnings.end(), res.warnings.begin(), res.warnings.end());
-  res.summary = summary_json(sc, r, warnings, driver != nullptr ? driver->command_source() : CommandSource{});
+  if (driver != nullptr) res.degraded = driver->degraded_reasons();
+  res.summary = summary_json(sc, r, warnings, driver != nullptr ? driver->command_source() : CommandSource{}, res.degraded);
   res.summary_text = summary_text(sc, r);
 }
 
@@ -698,6 +701,7 @@ BatchResult run_batch(const Scenario& sc, const BatchOptions& opt, std::ostream&
     log << "error: " << error << "\n";
     res.exit_code = 1;
   }
+  if (res.exit_code == 0 && !res.degraded.empty() && !opt.allow_degraded) res.exit_code = kExitDegraded;
   res.results_dir = dir.results_dir();
   for (const std::string& w : dir.warnings()) res.warnings.push_back(w);
   return res;

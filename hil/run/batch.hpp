@@ -49,6 +49,10 @@ class ExternalDriver {
   virtual void report(io::JsonObject& summary, std::string& text) const = 0;
   // summary.json's provenance: where the commands came from (they are not the built-in ECU's).
   virtual CommandSource command_source() const = 0;
+  // The end: why the session did not do what a session must (no ECU, commands that timed
+  // out, a bus that reported errors or dropped frames); empty if it did. Any reason makes the
+  // run's status "degraded" (summary.json status and degraded, the last line, exit 4).
+  virtual std::vector<std::string> degraded_reasons() const { return {}; }
 };
 
 struct BatchOptions {
@@ -63,7 +67,13 @@ struct BatchOptions {
   ExternalDriver* driver = nullptr;  // null: the built-in ECU, as fast as possible
   // set: the real-time loop (SCHED_FIFO, absolute deadlines, rows to a writer thread)
   const RealtimeOptions* realtime = nullptr;
+  // a degraded session (ExternalDriver::degraded_reasons) exits 0 instead of 4; its status
+  // stays "degraded"
+  bool allow_degraded = false;
 };
+
+// The exit code of a degraded bus session (docs/cli.md).
+inline constexpr int kExitDegraded = 4;
 
 // A run whose energy audit does not close to this relative residual (0.1 %) is flagged.
 // Measured on every shipped scenario at 1 ms: RK4 closes to 1e-14..4e-11, implicit Euler
@@ -72,7 +82,8 @@ struct BatchOptions {
 inline constexpr double kAuditWarnRelative = 1e-3;
 
 struct BatchResult {
-  int exit_code = 0;  // 0 ok, 3 run-time fault, 128 + signal interrupted, 1 output error
+  int exit_code = 0;  // 0 ok, 3 run-time fault, 4 degraded session, 128 + signal interrupted, 1 output error
+  std::vector<std::string> degraded;  // why the session was degraded (empty: it was not)
   io::JsonObject summary;
   std::string summary_text;          // human-readable lines for the terminal
   std::vector<std::string> warnings; // for the terminal: "warning: ..."

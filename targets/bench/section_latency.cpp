@@ -94,7 +94,7 @@ void section_latency(Bench& b) {
     fail(b, r, why);
     b.rt_loop.status = r.status;
   } else {
-    take_summary(r, j);
+    take_summary(b, r, j);
     Latency& l = b.rt_loop;
     l.p50 = json_num(j, "realtime.wakeup_latency_us.p50");
     l.p99 = json_num(j, "realtime.wakeup_latency_us.p99");

@@ -20,7 +20,7 @@ void section_runs(Bench& b);
 // Reads DIR/name/summary.json written by this bench (not an earlier one); takes a sub-run's
 // figures from it (section_runs.cpp; the real-time run of section (c) too).
 bool read_summary(const std::string& dir, std::time_t since, Json& j, std::string& why);
-void take_summary(SubRun& r, const Json& j);
+void take_summary(Bench& b, SubRun& r, const Json& j);
 
 // One whole run of sc in this process, timed (section_speed.cpp; section (f) too).
 bool timed_run(const ehpt::hil::Scenario& sc, double& wall_s, ehpt::hil::RunFigures* figures, std::string& why);

@@ -32,6 +32,8 @@ class FollowerBus final : public io::can::Transport {
   std::int64_t silent_from_step = -1;  // >= 0: no answer to samples at or after this step
   std::int64_t silent_until_step = -1;  // and answers again from this step on
   bool hostile = false;                 // add one malformed frame of each kind per sample
+  // what the transport reports on top (error frames, sends it could not make)
+  std::int64_t extra_error_frames = 0, extra_send_dropped = 0;
 
   bool send(const Frame& f) override {
     ++counters_.frames_out;
@@ -91,7 +93,12 @@ class FollowerBus final : public io::can::Transport {
   }
   bool wait(std::int64_t) override { return count_ > 0; }
   bool has_peer() const override { return true; }
-  const io::can::TransportCounters& counters() const override { return counters_; }
+  const io::can::TransportCounters& counters() const override {
+    shown_ = counters_;
+    shown_.error_frames += extra_error_frames;
+    shown_.send_dropped += extra_send_dropped;
+    return shown_;
+  }
   std::string describe() const override { return "fake"; }
 
   std::int64_t first_flagged_step = -1;
@@ -108,9 +115,11 @@ class FollowerBus final : public io::can::Transport {
   Frame last_;
   bool have_last_ = false, restarted_ = false;
   io::can::TransportCounters counters_;
+  mutable io::can::TransportCounters shown_;
 };
 
 struct BusRun {
+  std::vector<std::string> degraded;  // ExternalDriver::degraded_reasons
   std::unique_ptr<Simulation> sim;
   io::JsonObject summary;
   std::string text;
@@ -132,6 +141,7 @@ BusRun run_on(FollowerBus& bus, const Scenario& sc, const std::string& out_dir) 
   BusPlantOptions bo;
   bo.lockstep = true;
   bo.lockstep_wait_s = 1e-4;  // a silent ECU costs 0.1 ms of wall time per sample
+  bo.peer_wait_s = 0.05;      // one that never answers sample 0 costs 50 ms
   std::string error;
   auto driver = make_bus_plant(sc, bus, bo, error);
   EXPECT_TRUE(driver) << error;
@@ -149,6 +159,7 @@ BusRun run_on(FollowerBus& bus, const Scenario& sc, const std::string& out_dir) 
   r.run_phase_allocations = test::allocation_count() - before;
   EXPECT_TRUE(driver->flush(error)) << error;
   driver->report(r.summary, r.text);
+  r.degraded = driver->degraded_reasons();
   return r;
 }
 
@@ -182,6 +193,34 @@ TEST(BusPlant, LockstepEqualsTheCodecReferenceAndAllocatesNothing) {
   EXPECT_NE(r.summary.str().find("\"commands_applied\": 3001"), std::string::npos) << r.summary.str();
   EXPECT_NE(r.summary.str().find("\"timeouts\": 0"), std::string::npos);
   EXPECT_EQ(bus.first_flagged_step, -1);
+  EXPECT_TRUE(r.degraded.empty()) << r.degraded.front();  // an ECU that answered every sample: not degraded
+}
+
+// Every reason of a degraded session on its own: each is named, and a clean session has none.
+TEST(BusPlant, EachReasonOfADegradedSessionIsNamed) {
+  {
+    FollowerBus bus;
+    bus.extra_error_frames = 3;
+    EXPECT_EQ(run_on(bus, scenario(2), fresh("errors")).degraded,
+              std::vector<std::string>{"3 error frames or protocol errors on the bus"});
+  }
+  {
+    FollowerBus bus;
+    bus.extra_send_dropped = 1;
+    EXPECT_EQ(run_on(bus, scenario(2), fresh("dropped")).degraded,
+              std::vector<std::string>{"1 frames the plant could not send (no ECU connected, or one too slow)"});
+  }
+  {
+    FollowerBus bus;  // never answers (from sample 0 on)
+    bus.silent_from_step = 0;
+    const auto degraded = run_on(bus, scenario(2), fresh("alone")).degraded;
+    ASSERT_GE(degraded.size(), 1u);
+    EXPECT_EQ(degraded[0], "no ECU: not one command in the whole session (none connected, or it never answered)");
+  }
+  {
+    FollowerBus bus;
+    EXPECT_TRUE(run_on(bus, scenario(2), fresh("clean2")).degraded.empty());
+  }
 }
 
 TEST(BusPlant, HostileFramesAreCountedByReasonAndChangeNothing) {
@@ -211,7 +250,13 @@ TEST(BusPlant, ASilentEcuGivesTheSafeStateAtTheStepItsCommandTimesOutAndAnAnswer
   EXPECT_NE(j.find("\"timeouts\": 1,"), std::string::npos) << j;
   EXPECT_NE(j.find("\"safe_state_time_s\": 1.979,"), std::string::npos) << j;
   EXPECT_NE(j.find("\"longest_command_gap_s\": 2.01"), std::string::npos) << j;  // 2010 steps
-  EXPECT_NE(j.find("\"lockstep_waits_timed_out\": 200,"), std::string::npos) << j;
+  // 200 silent samples: the plant waits for 10 of them, then stops waiting (an ECU that is gone
+  // must not cost a wait per sample) until the answer of 14000, after which it waits again
+  EXPECT_NE(j.find("\"lockstep_waits_timed_out\": 10,"), std::string::npos) << j;
+  // a degraded session: each reason named
+  EXPECT_EQ(r.degraded, (std::vector<std::string>{
+                            "the ECU's commands timed out 1 time: 1.979 s in the safe state",
+                            "10 lockstep waits for the ECU timed out; the plant stopped waiting at t = 12.09 s after 10 in a row"}));
   // the first sample after 12021 says so on the bus
   EXPECT_EQ(bus.first_flagged_step, 12030);
   // and meanwhile the drive delivers nothing (its torque reference is zero), though it did

@@ -109,6 +109,29 @@ class SteppingErrors(unittest.TestCase):
         psd.write_command(ehpt.PsdCommand(iceON=False))  # the right one is taken
         ev.write_command(ehpt.EvCommand(driveTauRef_Nm=1.0))
 
+    def test_a_non_finite_command_is_refused_and_not_applied(self):
+        """+inf, -inf and NaN are never applied (as over LCM; CAN cannot carry them): ehpt.Error,
+        and the command held is the one before."""
+        for name, make in (("psecu2_nedc", lambda v: ehpt.PsdCommand(motTauRef_Nm=v)),
+                           ("ev_nedc", lambda v: ehpt.EvCommand(driveTauRef_Nm=v))):
+            sim = ehpt.Simulation(name, set={"solver.duration_s": 1}, external_ecu=True)
+            sim.write_command(make(1.0))
+            sim.step(sim.ecu_period_steps)
+            before = sim.outputs()
+            for bad in (float("inf"), float("-inf"), float("nan")):
+                with self.assertRaises(ehpt.Error) as cm:
+                    sim.write_command(make(bad))
+                self.assertIn("not finite (NaN or inf); not applied", str(cm.exception))
+            sim.step(sim.ecu_period_steps)
+            after = sim.outputs()
+            self.assertTrue(all(v == v for v in after.values()), after)  # no NaN got in
+            reference = ehpt.Simulation(name, set={"solver.duration_s": 1}, external_ecu=True)
+            reference.write_command(make(1.0))
+            reference.step(reference.ecu_period_steps)
+            reference.step(reference.ecu_period_steps)
+            self.assertEqual(after, reference.outputs())  # as if the bad ones were never sent
+            self.assertNotEqual(before, after)
+
     def test_a_rig_has_no_messages(self):
         sim = ehpt.Simulation("battery_cc_discharge")
         self.assertIsNone(sim.ecu_period_steps)

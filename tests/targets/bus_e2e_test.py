@@ -218,6 +218,37 @@ class Lockstep(BusTest):
 
 
 class Safety(BusTest):
+    def test_a_session_without_its_ecu_is_degraded_not_ok(self):
+        """No ECU ever connects: lockstep over the whole of NEDC (118 001 samples) must neither
+        wait once per sample (at 0.05 s a wait, 98 min) nor end "ok": status degraded with its
+        reasons, exit 4; --allow-degraded exits 0 and the status stays degraded."""
+        for allow in (False, True):
+            port = free_port()
+            out_dir = self.tmp / ("alone_allowed" if allow else "alone")
+            extra = ["--lockstep", "--ecu-wait-s", "0.5", "--lockstep-wait-s", "0.05"]
+            plant = self.plant("ev_nedc", port, out_dir, *(extra + (["--allow-degraded"] if allow else [])))
+            rc, _, err = self.finish(plant, 120)
+            self.assertEqual(rc, 0 if allow else 4, err)
+            summary = json.loads((out_dir / "summary.json").read_text())
+            self.assertEqual(summary["status"], "degraded")
+            self.assertEqual(summary["steps"], 1184000)  # it ran to the end, in the safe state
+            reasons = summary["degraded"]
+            self.assertTrue(reasons[0].startswith("no ECU: not one command in the whole session"), reasons)
+            self.assertTrue(any(r.startswith("10 lockstep waits for the ECU timed out; the plant stopped waiting")
+                                for r in reasons), reasons)
+            self.assertEqual(summary["bus"]["commands_applied"], 0)
+            self.assertEqual(summary["bus"]["lockstep_waits_timed_out"], 10)
+        # an ECU that answers every sample: not degraded, exit 0 (the negative case)
+        port = free_port()
+        plant = self.plant("ev_sort1", port, self.tmp / "with_ecu", "--lockstep", "--set", "solver.duration_s=3")
+        ecu = self.ecu("ev_sort1", port, "--set", "solver.duration_s=3")
+        rc, _, err = self.finish(plant, 60)
+        self.assertEqual(rc, 0, err)
+        self.assertEqual(self.finish(ecu, 30)[0], 0)
+        summary = json.loads((self.tmp / "with_ecu" / "summary.json").read_text())
+        self.assertEqual(summary["status"], "ok")
+        self.assertNotIn("degraded", summary)
+
     def test_ecu_silence_gives_the_safe_state_and_a_restart_ends_it(self):
         """Wall clock: kill the ECU mid-run -> safe state within the timeout (30 ms), ecuTimeout
         in PlantStatus, torque reference zero; a new ECU process brings the plant back. Sort1
@@ -230,10 +261,18 @@ class Safety(BusTest):
         ecu.wait()
         time.sleep(2.0)
         ecu2 = self.ecu("ev_sort1", port, "--set", "solver.duration_s=8")
-        rc, _, err = self.finish(plant, 60)
-        self.assertEqual(rc, 0, err)
+        rc, out, err = self.finish(plant, 60)
+        # a session that lost its ECU is degraded, whatever came after: exit 4, said so
+        self.assertEqual(rc, 4, err)
         self.assertEqual(self.finish(ecu2, 30)[0], 0)
-        bus = json.loads((self.tmp / "wall" / "summary.json").read_text())["bus"]
+        summary = json.loads((self.tmp / "wall" / "summary.json").read_text())
+        self.assertEqual(summary["status"], "degraded")
+        # the timeout, and the frames sent while no ECU was connected
+        self.assertRegex(summary["degraded"][0], r"^the ECU's commands timed out 1 time: [0-9.]+ s in the safe state$")
+        self.assertRegex(summary["degraded"][1], r"^[0-9]+ frames the plant could not send \(no ECU connected")
+        self.assertEqual(len(summary["degraded"]), 2, summary["degraded"])
+        self.assertIn("error: the session is degraded (exit 4", err)
+        bus = summary["bus"]
         self.assertEqual(bus["pacing"], "wall_clock")
         self.assertEqual(bus["timeouts"], 1)
         self.assertEqual(bus["peers_connected"], 2)
@@ -410,7 +449,8 @@ class Lcm(BusTest):
         ecu2 = start(["ecu", "ev_sort1", "--bus", LCM_URL, "--idle-timeout-s", "2", "--set", sets[0]], self.tmp)
         self.procs.append(ecu2)
         rc, _, err = self.finish(plant, 60)
-        self.assertEqual(rc, 0, err)
+        self.assertEqual(rc, 4, err)  # degraded: the ECU was lost for a while
+        self.assertIn("the ECU's commands timed out 1 time", err)
         self.assertEqual(self.finish(ecu2, 30)[0], 0)
         bus = json.loads((self.tmp / "wall" / "summary.json").read_text())["bus"]
         self.assertEqual(bus["pacing"], "wall_clock")
