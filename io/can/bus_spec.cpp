@@ -26,6 +26,13 @@ bool parse_bus_spec(std::string_view text, BusSpec& out, std::string& error) {
     const std::size_t colon = rest.rfind(':');
     if (colon == std::string_view::npos || colon == 0) return usage("HOST:PORT is missing");
     spec.host = std::string(rest.substr(0, colon));
+    // an IPv6 address is bracketed, as in a URL: socketcand:[::1]:29536
+    if (spec.host.size() >= 2 && spec.host.front() == '[' && spec.host.back() == ']') {
+      spec.host = spec.host.substr(1, spec.host.size() - 2);
+      if (spec.host.empty()) return usage("the brackets hold no address");
+    } else if (spec.host.find_first_of("[]:") != std::string::npos) {
+      return usage("an IPv6 address is written in brackets: socketcand:[::1]:PORT");
+    }
     const std::string_view port = rest.substr(colon + 1);
     unsigned long value = 0;
     for (char c : port) {

@@ -1,6 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "io/can/codec.hpp"
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 #include <gtest/gtest.h>
 
 #include "test_plants.hpp"
@@ -13,6 +17,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "io/can/bus_spec.hpp"
@@ -1452,6 +1457,45 @@ TEST(BusSpec, AcceptsBothTransports) {
   EXPECT_EQ(b.port, 1);
   ASSERT_TRUE(parse_bus_spec("socketcand:localhost:65535", b, error)) << error;
   EXPECT_EQ(b.port, 65535);
+  // IPv6 in brackets, as in a URL
+  ASSERT_TRUE(parse_bus_spec("socketcand:[::1]:29536", b, error)) << error;
+  EXPECT_EQ(b.host, "::1");
+  EXPECT_EQ(b.port, 29536);
+}
+
+// A plant on [::1] and an ECU that connects there: the bus works over IPv6 loopback.
+TEST(BusSpec, AnIpv6LoopbackPlantTakesAClient) {
+  // a free port on ::1: bound to 0 by the kernel, then released
+  int port = 0;
+  {
+    const int fd = ::socket(AF_INET6, SOCK_STREAM, 0);
+    if (fd < 0) GTEST_SKIP() << "no IPv6 sockets here";
+    sockaddr_in6 a{};
+    a.sin6_family = AF_INET6;
+    a.sin6_addr = in6addr_loopback;
+    socklen_t len = sizeof a;
+    const bool bound = ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0 &&
+                       ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) == 0;
+    ::close(fd);
+    if (!bound) GTEST_SKIP() << "no IPv6 loopback here";
+    port = ntohs(a.sin6_port);
+  }
+  BusSpec spec;
+  std::string error;
+  ASSERT_TRUE(parse_bus_spec("socketcand:[::1]:" + std::to_string(port), spec, error)) << error;
+  auto server = open_socketcand_server(spec.host, spec.port, error);
+  if (!server && error.find("Address family") != std::string::npos) GTEST_SKIP() << "no IPv6 here: " << error;
+  ASSERT_TRUE(server) << error;
+  std::unique_ptr<Transport> ecu;
+  std::thread client([&] { ecu = open_socketcand_client(spec.host, spec.port, "can0", 5.0, error); });
+  Frame none[4];
+  for (int i = 0; i < 400 && !server->has_peer(); ++i) {
+    server->wait(10'000'000);
+    server->receive(none);
+  }
+  client.join();
+  EXPECT_TRUE(ecu) << error;
+  EXPECT_TRUE(server->has_peer());
 }
 
 TEST(BusSpec, RejectsBadSpecsNamingTheValue) {
@@ -1468,6 +1512,8 @@ TEST(BusSpec, RejectsBadSpecsNamingTheValue) {
       "socketcand:host:99999999999",
       "socketcand:host:abc",
       "socketcand:host:-1",
+      "socketcand:::1:29536",  // IPv6 without its brackets
+      "socketcand:[]:29536",
       "lcm:x",
       "",
   };
@@ -1485,6 +1531,8 @@ TEST(BusSpec, RejectsBadSpecsNamingTheValue) {
   EXPECT_NE(error.find("unknown transport"), std::string::npos) << error;
   EXPECT_FALSE(parse_bus_spec("socketcand:host:65536", b, error));
   EXPECT_NE(error.find("1 to 65535"), std::string::npos) << error;
+  EXPECT_FALSE(parse_bus_spec("socketcand:::1:29536", b, error));
+  EXPECT_NE(error.find("an IPv6 address is written in brackets: socketcand:[::1]:PORT"), std::string::npos) << error;
 }
 
 }  // namespace
