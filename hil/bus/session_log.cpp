@@ -53,27 +53,45 @@ bool read_inputs_log(const std::string& path, InputsLog& out, std::vector<std::s
   const auto bad = [&](const std::string& what) {
     if (problems.size() < 20) problems.push_back(path + ":" + std::to_string(line_no) + ": " + what);
   };
+  bool commands_seen = false;
   while (std::getline(in, line)) {
     ++line_no;
+    if (!line.empty() && line.back() == '\r') line.pop_back();  // a log saved with CRLF line ends
     if (line.empty()) continue;
     if (line[0] == '#') {
       const auto value = [&](const char* key) -> const char* {
         const std::string k = std::string("# ") + key + " ";
         return line.rfind(k, 0) == 0 ? line.c_str() + k.size() : nullptr;
       };
+      // the header comes first and says each thing once: a later line must not change what
+      // the commands above it were read as
+      const auto header = [&](const char* key, std::string& field, const char* v) {
+        if (commands_seen) {
+          bad(std::string("'# ") + key + "' after the commands: the header comes before them");
+        } else if (!field.empty()) {
+          bad(std::string("a second '# ") + key + "' line (the first said '" + field + "')");
+        } else {
+          field = v;
+        }
+      };
       if (line == "# ehpt inputs log 1") {
         version = true;
       } else if (const char* v = value("scenario")) {
-        out.scenario_path = v;
+        header("scenario", out.scenario_path, v);
       } else if (const char* v2 = value("set")) {
-        out.overrides.emplace_back(v2);
+        if (commands_seen) {
+          bad("'# set' after the commands: the header comes before them");
+        } else {
+          out.overrides.emplace_back(v2);
+        }
       } else if (const char* v3 = value("family")) {
-        out.family = v3;
+        header("family", out.family, v3);
       } else if (const char* v4 = value("pacing")) {
-        out.pacing = v4;
+        header("pacing", out.pacing, v4);
       }
       continue;
     }
+    commands_seen = true;
     std::istringstream f(line);
     std::string kind;
     long long step = 0, stamp_step = 0;

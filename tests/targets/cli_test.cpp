@@ -1337,6 +1337,21 @@ TEST(CliReplay, ABadLogIsNamedWithItsLineAndNothingRuns) {
       "its commands are of family 'ev' but");
   bad("# ehpt inputs log 1\n# scenario " + ehpt::test::source_path("scenarios/battery_cc_discharge.toml") + "\n# family ev\n", 2,
       "has no bus messages");
+  // the header comes first and says each thing once
+  bad(head + "ev 0 0 0 0 1.5\n# family psd\n", 2, dir + "/inputs.log:6: '# family' after the commands: the header comes before them");
+  bad(head + "ev 0 0 0 0 1.5\n# set solver.step_s=0.002\n", 2, dir + "/inputs.log:6: '# set' after the commands");
+  bad("# ehpt inputs log 1\n# scenario " + sc + "\n# family ev\n# family psd\n", 2,
+      dir + "/inputs.log:4: a second '# family' line (the first said 'ev')");
+  // a log saved with CRLF line ends reads as the same log (it was "family 'ev' vs 'ev'")
+  std::string crlf = head + "ev 0 0 0 0\n";
+  for (std::size_t at = 0; (at = crlf.find('\n', at)) != std::string::npos; at += 2) crlf.replace(at, 1, "\r\n");
+  bad(crlf, 2, dir + "/inputs.log:5: expected 6 fields");
+  std::string crlf_good = head + "ev 0 0 0 0 1.5\n";
+  for (std::size_t at = 0; (at = crlf_good.find('\n', at)) != std::string::npos; at += 2) crlf_good.replace(at, 1, "\r\n");
+  std::ofstream(dir + "/inputs.log") << crlf_good;
+  const Result ran = ehpt_argv({"replay", dir, "--out", (root / "crlf").string()});
+  EXPECT_EQ(ran.exit_code, 1) << ran.err;  // it ran: the hash differs from the dummy summary's
+  EXPECT_HAS(ran.out, "DIFFERS from the session");
   fs::remove(dir + "/inputs.log");
   const Result r = ehpt_argv({"replay", dir});
   EXPECT_EQ(r.exit_code, 2);
