@@ -217,17 +217,36 @@ bool add_to_manifest(const std::string& dir, const std::vector<std::string>& nam
   return write_file_atomically(dir + "/" + kManifestName, manifest_text(all), error);
 }
 
+// ---- names beside DIR ---------------------------------------------------------------------
+
+// A name beside DIR: DIR + suffix, or, where that last component would pass NAME_MAX (a --out
+// name near 255 bytes, which is a valid folder name), DIR's name cut short and told apart by a
+// hash of the whole name. Still beside DIR, and the same for the same DIR, so that the lock
+// of a second run with the same --out is the first one's.
+static std::string beside(const std::string& final_dir, const std::string& suffix) {
+  constexpr std::size_t kNameMax = 255;
+  const fs::path p(final_dir);
+  const std::string name = p.filename().string();
+  if (name.size() + suffix.size() <= kNameMax) return final_dir + suffix;
+  std::uint64_t h = 1469598103934665603ull;  // FNV-1a: a stable, short tag, not a security measure
+  for (const unsigned char c : name) h = (h ^ c) * 1099511628211ull;
+  char tag[18];
+  std::snprintf(tag, sizeof tag, "~%016llx", static_cast<unsigned long long>(h));
+  const std::size_t keep = kNameMax - suffix.size() - (sizeof tag - 1);
+  return (p.parent_path() / (name.substr(0, keep) + tag)).string() + suffix;
+}
+
 // ---- the lock ---------------------------------------------------------------------------
 
 bool DirLock::acquire(const std::string& final_dir, std::string& error) {
   release();
-  path_ = final_dir + ".ehpt-lock";
+  path_ = beside(final_dir, ".ehpt-lock");
   const std::string pid = std::to_string(::getpid());
   for (int attempt = 0; attempt < 10 && fd_ < 0; ++attempt) {
     int fd = ::open(path_.c_str(), O_RDWR | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0 && errno == ENOENT) {
       // born with ehpt's text: a temporary file, then a hard link (atomic, never replaces)
-      const std::string tmp = path_ + ".tmp-" + pid;
+      const std::string tmp = beside(final_dir, ".ehpt-lock.tmp-" + pid);
       const int tfd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
       if (tfd < 0) {
         error = tmp + ": cannot create the lock file: " + errno_text();
@@ -351,9 +370,9 @@ bool OutputDir::open(const std::string& final_dir, std::string& error) {
   }
 
   // 3. a partial folder of our own: mkdir fails rather than reuse an existing path
-  const std::string base = final_ + ".partial-" + std::to_string(::getpid());
+  const std::string base = beside(final_, ".partial-" + std::to_string(::getpid()));
   for (int i = 0; i < 100 && !created_partial_; ++i) {
-    partial_ = i == 0 ? base : base + "-" + std::to_string(i);
+    partial_ = i == 0 ? base : beside(final_, ".partial-" + std::to_string(::getpid()) + "-" + std::to_string(i));
     if (::mkdir(partial_.c_str(), 0777) == 0) {
       created_partial_ = true;
     } else if (errno != EEXIST) {
@@ -446,10 +465,10 @@ bool OutputDir::commit(std::string& error, bool replace_earlier) {
     return false;
   }
   // move it aside under a name of ours, and make sure it is the folder we checked
-  const std::string base = final_ + ".replaced-" + std::to_string(::getpid());
+  const std::string base = ".replaced-" + std::to_string(::getpid());
   std::string aside;
   for (int i = 0; i < 100 && aside.empty(); ++i) {
-    const std::string candidate = i == 0 ? base : base + "-" + std::to_string(i);
+    const std::string candidate = beside(final_, i == 0 ? base : base + "-" + std::to_string(i));
     if (rename_no_replace(final_, candidate)) {
       aside = candidate;
     } else if (errno != EEXIST) {

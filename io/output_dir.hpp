@@ -2,7 +2,8 @@
 #pragma once
 // An output folder that never looks complete before it is, and never touches what is not
 // ours (README "--out"):
-//  * a lock (DirLock): open() takes an exclusive flock on "DIR.ehpt-lock" for the whole run,
+//  * a lock (DirLock): open() takes an exclusive flock on "DIR.ehpt-lock" for the whole run
+//    (for a DIR name near 255 bytes: the name cut short and a hash of it, see beside()),
 //    so a second run with the same --out, or `ehpt plot DIR`, stops at once (exit 1)
 //    instead of mixing files;
 //  * a private temporary folder "DIR.partial-<pid>" made with mkdir (never an existing

@@ -65,6 +65,29 @@ TEST(OutputDir, WritesIntoAPrivateFolderAndCommitsWithAManifest) {
   EXPECT_EQ(std::distance(fs::directory_iterator(root), fs::directory_iterator()), 1);  // only run/
 }
 
+// A folder name of 255 bytes is a valid --out: its lock and temporary folder beside it are
+// named within the 255-byte limit too (they were DIR + ".ehpt-lock.tmp-PID": refused from 246),
+// for a new run and for one that replaces it.
+TEST(OutputDir, AFolderNameOfTheFullLengthIsAnOutputFolder) {
+  const fs::path root = scratch("long");
+  for (const std::size_t length : {200u, 240u, 246u, 255u}) {
+    const std::string dir = (root / std::string(length, 'r')).string();
+    run_into(dir, {{"summary.json", "first"}});
+    run_into(dir, {{"summary.json", "second"}});  // replaces the earlier run
+    EXPECT_EQ(read(dir + "/summary.json"), "second") << length;
+    // nothing left beside it: the lock, the temporary and the replaced folders were ours
+    EXPECT_EQ(std::distance(fs::directory_iterator(root), fs::directory_iterator()), 1) << length;
+    fs::remove_all(dir);
+  }
+  // a second run with the same long name finds the first one's lock
+  const std::string dir = (root / std::string(255, 'q')).string();
+  OutputDir first, second;
+  std::string error;
+  ASSERT_TRUE(first.open(dir, error)) << error;
+  EXPECT_FALSE(second.open(dir, error));
+  EXPECT_NE(error.find("another ehpt run is writing this folder"), std::string::npos) << error;
+}
+
 TEST(OutputDir, ReplacesAnEarlierRunDeletingOnlyTheFilesItsManifestLists) {
   const fs::path root = scratch("replace");
   const std::string dir = (root / "run").string();
