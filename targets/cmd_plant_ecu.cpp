@@ -40,7 +40,8 @@ const char* kPlantHelp =
     "figures in summary.json (\"bus\").\n"
     "  --bus SPEC       socketcan:IFACE (e.g. socketcan:vcan0), or socketcand:HOST:PORT (the\n"
     "                   plant listens there; python-can's socketcand interface and 'ehpt ecu'\n"
-    "                   connect), or lcm:URL (lcm:udpm://239.255.76.67:7667?ttl=0, lcm:memq://)\n"
+    "                   connect), or lcm:URL (lcm:udpm://239.255.76.67:7667?ttl=0; ttl > 0 warns:\n"
+    "                   the messages leave this host)\n"
     "  --lcm-prefix P   LCM channels P + PLANT_STATUS and P + ECU_COMMAND (default EHPT_)\n"
     "  --lockstep       advance one ECU period only after the ECU's command for it has arrived\n"
     "                   (deterministic SIL); default: wall clock (real time, latest command)\n"
@@ -169,6 +170,24 @@ int parse_bus_args(const std::vector<std::string>& args, bool plant, const char*
             : !ehpt::io::can::parse_bus_spec(a.bus, a.spec, error)) {
     std::cerr << error << "\n";
     return 1;
+  }
+  if (a.lcm && a.lcm_url.rfind("memq://", 0) == 0) {
+    // memq is a queue inside one process: 'ehpt plant' and an ECU in another process never meet
+    std::cerr << "--bus " << a.bus << ": lcm:memq:// is in-process only, so an ECU in another process can never "
+              << "hear this " << (plant ? "plant" : "ECU") << "; use lcm:udpm://239.255.76.67:7667?ttl=0\n";
+    return 1;
+  }
+  if (a.lcm) {
+    const int ttl = ehpt::io::lcm::lcm_ttl(a.lcm_url);
+    if (ttl < 0) {
+      std::cerr << "--bus " << a.bus << ": ttl must be a whole number 0..255\n";
+      return 1;
+    }
+    if (ttl > 0) {
+      std::cerr << "warning: --bus " << a.bus << ": ttl=" << ttl << " lets the multicast leave this host (" << ttl
+                << (ttl == 1 ? " router hop" : " router hops")
+                << "): the plant's messages reach the local network; ttl=0 keeps them on this machine\n";
+    }
   }
   return 0;
 }

@@ -14,13 +14,13 @@ namespace ehpt::io::lcm {
 bool parse_lcm_spec(const std::string& text, std::string& url, std::string& error) {
   const std::string shown = text.substr(0, 200);
   if (text.rfind("lcm:", 0) != 0) {
-    error = "--bus " + shown + ": not an LCM bus (use lcm:udpm://239.255.76.67:7667?ttl=0 or lcm:memq://)";
+    error = "--bus " + shown + ": not an LCM bus (use lcm:udpm://239.255.76.67:7667?ttl=0; lcm:memq:// works only within one process)";
     return false;
   }
   url = text.substr(4);
   const bool udpm = url.rfind("udpm://", 0) == 0, memq = url.rfind("memq://", 0) == 0;
   if (!udpm && !memq) {
-    error = "--bus " + shown + ": unknown LCM provider (use lcm:udpm://ADDRESS:PORT?ttl=0 or lcm:memq://)";
+    error = "--bus " + shown + ": unknown LCM provider (use lcm:udpm://ADDRESS:PORT?ttl=0; lcm:memq:// works only within one process)";
     return false;
   }
   if (udpm) {
@@ -45,6 +45,22 @@ bool parse_lcm_spec(const std::string& text, std::string& url, std::string& erro
     }
   }
   return true;
+}
+
+int lcm_ttl(const std::string& url) {
+  const std::size_t q = url.find('?');
+  if (q == std::string::npos) return 0;
+  for (std::size_t at = q + 1; at < url.size();) {
+    const std::size_t end = std::min(url.find('&', at), url.size());
+    const std::string opt = url.substr(at, end - at);
+    if (opt.rfind("ttl=", 0) == 0) {
+      const std::string v = opt.substr(4);
+      if (v.empty() || v.size() > 3 || v.find_first_not_of("0123456789") != std::string::npos) return -1;
+      return std::stoi(v);
+    }
+    at = end + 1;
+  }
+  return 0;
 }
 
 std::unique_ptr<LcmBus> LcmBus::open(const std::string& url, std::string& error) {

@@ -20,6 +20,8 @@ namespace ehpt::io::lcm {
 
 // "lcm:URL" -> URL checked: a udpm:// or memq:// provider; false and why if not.
 bool parse_lcm_spec(const std::string& text, std::string& url, std::string& error);
+// The multicast TTL a udpm URL asks for (?ttl=N; liblcm's default 0), -1 if it is not a number.
+int lcm_ttl(const std::string& url);
 
 struct LcmCounters {
   std::int64_t published = 0;

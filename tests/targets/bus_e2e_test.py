@@ -569,6 +569,22 @@ class BadInput(BusTest):
         r = run(["ecu", "ev_nedc", "--bus", "lcm:tcpq://127.0.0.1"])
         self.assertEqual(r.returncode, 1)
         self.assertIn("unknown LCM provider", r.stderr)
+        # memq is a queue inside one process: between two it can never work
+        for cmd in (["plant", "ev_nedc", "--bus", "lcm:memq://", "--out", str(out)], ["ecu", "ev_nedc", "--bus", "lcm:memq://"]):
+            r = run(cmd)
+            self.assertEqual(r.returncode, 1, r.stderr)
+            self.assertIn("--bus lcm:memq://: lcm:memq:// is in-process only, so an ECU in another process can never", r.stderr)
+            self.no_folder(out)
+        r = run(["plant", "ev_nedc", "--bus", "lcm:udpm://239.255.76.67:7667?ttl=x", "--out", str(out)])
+        self.assertEqual(r.returncode, 1)
+        self.assertIn("ttl must be a whole number 0..255", r.stderr)
+        # ttl > 0 warns (the scenario is not there, so no socket is ever opened: nothing is sent)
+        r = run(["plant", "no_such_scenario", "--bus", "lcm:udpm://239.255.76.67:7667?ttl=1", "--out", str(out)])
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("warning: --bus lcm:udpm://239.255.76.67:7667?ttl=1: ttl=1 lets the multicast leave this host "
+                      "(1 router hop)", r.stderr)
+        r = run(["plant", "no_such_scenario", "--bus", "lcm:udpm://239.255.76.67:7667?ttl=0", "--out", str(out)])
+        self.assertNotIn("warning", r.stderr)
         r = run(["plant", "ev_nedc", "--bus", "socketcand:127.0.0.1:70000", "--out", str(out)])
         self.assertEqual(r.returncode, 1)
         self.assertIn("the port must be a number from 1 to 65535", r.stderr)
