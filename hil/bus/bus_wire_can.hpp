@@ -44,10 +44,14 @@ class CanWire {
   void wait(std::int64_t timeout_ns) { bus_.wait(timeout_ns); }
   std::string describe() const { return bus_.describe(); }
 
-  // Before t = 0: what comes in is logged and dropped (nothing is ours yet).
+  // Before t = 0: what comes in is logged, counted (rejected.before_start) and dropped: no
+  // sample has gone out that it could answer.
   void idle() {
     io::can::Frame buf[64];
-    while (const std::size_t k = bus_.receive(buf)) log_frames(std::span<const io::can::Frame>(buf, k));
+    while (const std::size_t k = bus_.receive(buf)) {
+      log_frames(std::span<const io::can::Frame>(buf, k));
+      before_start_ += static_cast<std::int64_t>(k);
+    }
   }
 
   // The sensors, then PlantStatus (the end of the sample); returns signals saturated.
@@ -118,13 +122,15 @@ class CanWire {
     rej.integer("out_of_range", rx.out_of_range);
     rej.integer("stale", rx.stale);
     rej.integer("malformed", tc.rx_malformed);
+    rej.integer("before_start", before_start_);
     b.object("rejected", rej);
     b.integer("frames_lost", rx.lost);
     b.integer("send_dropped", tc.send_dropped);
     b.integer("error_frames", tc.error_frames);
     b.integer("peers_connected", tc.peers_connected);
     b.integer("peers_lost", tc.peers_lost);
-    rejected = rx.unknown_id + rx.wrong_length + rx.bad_counter + rx.out_of_range + rx.stale + tc.rx_malformed;
+    b.integer("peers_refused", tc.peers_refused);
+    rejected = rx.unknown_id + rx.wrong_length + rx.bad_counter + rx.out_of_range + rx.stale + tc.rx_malformed + before_start_;
   }
   // Why the bus itself degraded the session (ExternalDriver::degraded_reasons).
   void degraded_reasons(std::vector<std::string>& why) const {
@@ -172,6 +178,7 @@ class CanWire {
   io::can::TxCounters tx_;
   Command incoming_{};
   unsigned received_mask_ = 0;
+  std::int64_t before_start_ = 0;  // frames that came before t = 0 (idle)
   io::TextFileWriter log_;
   io::HandoffBuffer log_buf_;
   std::string line_;       // one candump line (reserved)

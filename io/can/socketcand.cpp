@@ -397,9 +397,9 @@ class Server final : public Transport {
           break;
         }
       }
-      if (slot == nullptr) {  // full: refuse politely
+      if (slot == nullptr) {  // full: refuse politely (a refused connection, not a malformed frame)
         ::close(fd);
-        ++counters_.rx_malformed;
+        ++counters_.peers_refused;
         continue;
       }
       set_nodelay(fd);

@@ -22,6 +22,7 @@ struct TransportCounters {
   std::int64_t rx_malformed = 0;    // received text or frames that are not a classic data frame
   std::int64_t peers_connected = 0; // socketcand: clients that completed the handshake
   std::int64_t peers_lost = 0;      // socketcand: clients that went away
+  std::int64_t peers_refused = 0;   // socketcand: connections refused (every slot taken)
 };
 
 class Transport {

@@ -14,6 +14,7 @@
 
 #include "alloc_counter.hpp"
 #include "hil/run/batch.hpp"
+#include "io/json_value.hpp"
 #include "hil/bus/bus_plant.hpp"
 #include "hil/run/simulation.hpp"
 #include "io/can/codec.hpp"
@@ -236,6 +237,15 @@ TEST(BusPlant, HostileFramesAreCountedByReasonAndChangeNothing) {
                            "\"stale\": 3000", "\"bad_counter\": 3001", "\"commands_applied\": 3001"}) {
     EXPECT_NE(j.find(want), std::string::npos) << want << " in " << j;
   }
+  // every frame in lands in exactly one counter: accepted, or one reason
+  io::JsonValue v;
+  std::string error;
+  ASSERT_TRUE(io::parse_json(j, v, error)) << error;
+  const io::JsonValue& bus_json = *v.find("bus");
+  const auto n = [](const io::JsonValue& o, const char* key) { return std::stoll(o.find(key)->text); };
+  long long reasons = 0;
+  for (const auto& m : bus_json.find("rejected")->members) reasons += std::stoll(m.value.text);
+  EXPECT_EQ(n(bus_json, "frames_in"), n(bus_json, "frames_accepted") + reasons) << j;
 }
 
 TEST(BusPlant, ASilentEcuGivesTheSafeStateAtTheStepItsCommandTimesOutAndAnAnswerEndsIt) {

@@ -73,6 +73,9 @@ TEST(SocketcandServer, SilentClientsLoseTheirSlotsAndAnEcuGetsIn) {
   EXPECT_TRUE(server->has_peer());
   EXPECT_GT(waited_s, 4.0);  // the silent ones had their 5 s
   EXPECT_GE(server->counters().error_frames, 8);
+  // the ECU's connections while every slot was taken: refused, and said so (not "malformed")
+  EXPECT_GE(server->counters().peers_refused, 1);
+  EXPECT_EQ(server->counters().rx_malformed, 0);
   for (int fd : silent) ::close(fd);
 }
 

@@ -378,6 +378,9 @@ class Safety(BusTest):
         # came in time would repeat a counter (bad_counter): either way it is refused
         self.assertGreater(rejected["stale"] + rejected["bad_counter"], sent["replay"] // 2)
         self.assertEqual(bus["timeouts"], 0)
+        # every frame in lands in exactly one counter (frames before t = 0: before_start)
+        self.assertEqual(bus["frames_in"], bus["frames_accepted"] + sum(v for k, v in rejected.items() if k != "malformed"),
+                         bus)
 
 
 LCM_URL = "lcm:udpm://239.255.76.67:7667?ttl=0"
