@@ -130,6 +130,7 @@ class CanWire {
     b.integer("peers_connected", tc.peers_connected);
     b.integer("peers_lost", tc.peers_lost);
     b.integer("peers_refused", tc.peers_refused);
+    b.integer("peers_evicted", tc.peers_evicted);
     rejected = rx.unknown_id + rx.wrong_length + rx.bad_counter + rx.out_of_range + rx.stale + tc.rx_malformed + before_start_;
   }
   // Why the bus itself degraded the session (ExternalDriver::degraded_reasons).

@@ -226,14 +226,23 @@ struct Stream {
   }
 };
 
-// A fixed ring of received frames.
+// The frames received and not yet taken, in order, each with the client it came from: a
+// client may hold at most share() of them (the rest waits in its socket, slowed by TCP's flow
+// control), so that one flooding the bus cannot keep the others' frames out.
 class FrameRing {
  public:
-  FrameRing() : frames_(4096) {}
+  static constexpr std::size_t kCapacity = 4096;
+  static constexpr std::size_t kSources = 9;  // 8 clients, and "no client" (the ehpt client's own)
+  FrameRing() : frames_(kCapacity), from_(kCapacity) {}
   bool full() const { return count_ == frames_.size(); }
-  bool push(const Frame& f) {
-    if (count_ == frames_.size()) return false;
-    frames_[(head_ + count_) % frames_.size()] = f;
+  bool full_for(std::size_t source) const { return full() || (source < kSources - 1 && held_[source] >= share()); }
+  static constexpr std::size_t share() { return kCapacity / 16; }
+  bool push(const Frame& f, std::size_t source = kSources - 1) {
+    if (full_for(source)) return false;
+    const std::size_t at = (head_ + count_) % frames_.size();
+    frames_[at] = f;
+    from_[at] = static_cast<std::uint8_t>(source);
+    ++held_[source];
     ++count_;
     return true;
   }
@@ -241,6 +250,7 @@ class FrameRing {
     std::size_t n = 0;
     while (n < out.size() && count_ > 0) {
       out[n++] = frames_[head_];
+      --held_[from_[head_]];
       head_ = (head_ + 1) % frames_.size();
       --count_;
     }
@@ -249,6 +259,8 @@ class FrameRing {
 
  private:
   std::vector<Frame> frames_;
+  std::vector<std::uint8_t> from_;
+  std::array<std::size_t, kSources> held_{};
   std::size_t head_ = 0, count_ = 0;
 };
 
@@ -299,6 +311,12 @@ void close_in_order(Streams& streams) {
 // a client that has not reached raw mode this long after connecting loses its slot (the
 // handshake takes milliseconds; 8 silent connections must not lock the ECU out)
 constexpr std::int64_t kHandshakeNs = 5'000'000'000;
+// when every slot is taken, a client in raw mode that has sent nothing this long after its
+// handshake (a listener: a logger, or a forgotten client) makes room for a new connection
+constexpr std::int64_t kIdleEvictNs = 5'000'000'000;
+// the frames one client may hold in the plant's ring (FrameRing::share(), 256): a client
+// flooding the bus must not keep the ECU's frames out (200 000 unknown-id frames from one
+// client made lockstep waits time out); each pump starts with the next client
 
 class Server final : public Transport {
  public:
@@ -375,6 +393,7 @@ class Server final : public Transport {
     State state = State::kFree;
     std::int64_t live_after_ns = 0;
     std::int64_t accepted_ns = 0;  // a client still in its handshake after kHandshakeNs is dropped
+    std::int64_t sent_frames = 0;  // since its handshake: a listener that never sends can be evicted
   };
 
   static bool live(const Client& c, std::int64_t now) { return c.state == State::kRaw && now >= c.live_after_ns; }
@@ -397,6 +416,7 @@ class Server final : public Transport {
           break;
         }
       }
+      if (slot == nullptr) slot = evict_idle_listener(now_ns());
       if (slot == nullptr) {  // full: refuse politely (a refused connection, not a malformed frame)
         ::close(fd);
         ++counters_.peers_refused;
@@ -410,7 +430,11 @@ class Server final : public Transport {
       if (!slot->stream.write_alone("< hi >")) drop(*slot);
     }
     const std::int64_t now = now_ns();
-    for (auto& c : clients_) {
+    // every client in turn, starting one further each pump, each up to its share of the ring
+    const std::size_t first = next_first_;
+    next_first_ = (next_first_ + 1) % kMaxClients;
+    for (std::size_t k = 0; k < kMaxClients; ++k) {
+      Client& c = clients_[(first + k) % kMaxClients];
       if (c.state == State::kFree) continue;
       if (c.state != State::kRaw && now - c.accepted_ns > kHandshakeNs) {  // a silent client frees its slot
         ++counters_.error_frames;
@@ -421,19 +445,21 @@ class Server final : public Transport {
       std::size_t consumed = 0;
       // while the plant has not taken what came in, the rest waits in the socket (TCP's
       // flow control slows the sender), so that no frame is dropped for want of room
-      while (!ring_.full()) {
+      const std::size_t source = static_cast<std::size_t>(&c - clients_.data());
+      while (!ring_.full_for(source)) {
         const std::string_view m = c.stream.next_message(consumed, counters_.rx_malformed);
         if (m.empty()) break;
         handle(c, m, now);
         if (c.state == State::kFree) break;
       }
       if (c.state == State::kFree) continue;
-      c.stream.drop_consumed(consumed, counters_.rx_malformed, ring_.full());
+      c.stream.drop_consumed(consumed, counters_.rx_malformed, ring_.full_for(source));
       if (!open || !c.stream.flush()) drop(c);
     }
   }
 
-  void handle(Client& c, std::string_view m, std::int64_t now) {
+  // One message of a client; true if it put a frame into the ring.
+  bool handle(Client& c, std::string_view m, std::int64_t now) {
     Frame f;
     switch (parse_socketcand(m, f)) {
       case SocketcandMessage::kOpen:
@@ -442,35 +468,51 @@ class Server final : public Transport {
         } else {
           ++counters_.error_frames;
         }
-        return;
+        return false;
       case SocketcandMessage::kRawmode:
         if (c.state == State::kOpen && c.stream.write_alone("< ok >")) {
           c.state = State::kRaw;
           c.live_after_ns = now + kSettleNs;
+          c.sent_frames = 0;
           ++counters_.peers_connected;
         } else {
           ++counters_.error_frames;
         }
-        return;
+        return false;
       case SocketcandMessage::kSend:
         if (c.state != State::kRaw) {
           ++counters_.error_frames;
-          return;
+          return false;
         }
-        if (ring_.push(f)) {
-          ++counters_.frames_in;
-        } else {
-          ++counters_.send_dropped;  // the plant did not keep up: the frame is lost
-        }
+        ++c.sent_frames;
         forward(c, f, now);
-        return;
+        if (ring_.push(f, static_cast<std::size_t>(&c - clients_.data()))) {
+          ++counters_.frames_in;
+          return true;
+        }
+        ++counters_.send_dropped;  // the plant did not keep up: the frame is lost
+        return false;
       case SocketcandMessage::kMalformed:
         ++counters_.rx_malformed;
-        return;
+        return false;
       default:
         ++counters_.error_frames;  // a command we do not serve (bcmode, echo, ...)
-        return;
+        return false;
     }
+  }
+
+  // Every slot taken and a new connection waiting: the raw-mode client that has sent nothing
+  // for the longest (at least kIdleEvictNs since its handshake) gives up its slot; nullptr if none.
+  Client* evict_idle_listener(std::int64_t now) {
+    Client* oldest = nullptr;
+    for (auto& c : clients_) {
+      if (c.state != State::kRaw || c.sent_frames != 0 || now - c.live_after_ns < kIdleEvictNs) continue;
+      if (oldest == nullptr || c.live_after_ns < oldest->live_after_ns) oldest = &c;
+    }
+    if (oldest == nullptr) return nullptr;
+    ++counters_.peers_evicted;
+    drop(*oldest);
+    return oldest;
   }
 
   // a bus: the other clients hear what one sends
@@ -486,6 +528,7 @@ class Server final : public Transport {
   int listen_fd_;
   std::string name_;
   std::array<Client, kMaxClients> clients_;
+  std::size_t next_first_ = 0;  // the client pump() reads first (round robin)
   FrameRing ring_;
   TransportCounters counters_;
 };
@@ -498,7 +541,8 @@ class Client final : public Transport {
     close_in_order(one);
   }
 
-  // start-up: the handshake, within the deadline
+  // start-up: the handshake, within the deadline; refused() after a failed one: the server
+  // closed before its greeting (every slot taken), worth trying again
   bool handshake(const std::string& channel, std::int64_t deadline_ns, std::string& error) {
     const std::string open = "< open " + channel + " >";
     const char* expect[] = {"hi", "ok", "ok"};
@@ -514,7 +558,9 @@ class Client final : public Transport {
         pollfd p{stream_.fd, POLLIN, 0};
         ::poll(&p, 1, 50);
         if (!stream_.read_some()) {
-          error = "the server closed the connection during the handshake";
+          refused_ = step == 0;  // closed before its "< hi >": a server with every slot taken
+          error = refused_ ? "the server refused the connection (every one of its client slots is taken)"
+                           : "the server closed the connection during the handshake";
           return false;
         }
         consumed = 0;
@@ -535,6 +581,7 @@ class Client final : public Transport {
     connected_ = true;
     return true;
   }
+  bool refused() const { return refused_; }
 
   bool send(const Frame& f) override {
     if (!connected_) {
@@ -595,6 +642,7 @@ class Client final : public Transport {
   }
   Stream stream_;
   bool connected_ = false;
+  bool refused_ = false;  // the handshake ended before "< hi >"
   std::string name_;
   FrameRing ring_;
   TransportCounters counters_;
@@ -680,24 +728,15 @@ std::string seconds_text(double s) {
 }
 }  // namespace
 
-std::unique_ptr<Transport> open_socketcand_client(const std::string& host, std::uint16_t port,
-                                                  const std::string& channel, double timeout_s, std::string& error) {
-  const std::string name = "socketcand:" + host + ":" + std::to_string(port);
-  sockaddr_storage addr{};
-  socklen_t len = 0;
-  if (!resolve(host, port, false, addr, len, error)) {
-    error = name + ": " + error;
-    return nullptr;
-  }
-  const std::int64_t deadline = now_ns() + static_cast<std::int64_t>(timeout_s * 1e9);
-  // A plant that is still loading its scenario does not listen yet: a refused connection is
-  // tried again every 20 ms until the deadline (an ECU started next to its plant needs no sleep).
-  int fd = -1;
+// Connects to addr, trying a refused connection again every 20 ms until the deadline; the
+// socket, or -1 with error set.
+static int connect_until(const sockaddr_storage& addr, socklen_t len, std::int64_t deadline, const std::string& name,
+                         double timeout_s, std::string& error) {
   for (;;) {
-    fd = ::socket(addr.ss_family, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+    const int fd = ::socket(addr.ss_family, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
     if (fd < 0) {
       error = name + ": cannot create a socket: " + std::strerror(errno);
-      return nullptr;
+      return -1;
     }
     int e = 0;
     if (::connect(fd, reinterpret_cast<const sockaddr*>(&addr), len) != 0 && errno != EINPROGRESS) {
@@ -712,7 +751,7 @@ std::unique_ptr<Transport> open_socketcand_client(const std::string& host, std::
         e = errno;
       }
     }
-    if (e == 0) break;
+    if (e == 0) return fd;
     ::close(fd);
     if (e == ECONNREFUSED && now_ns() + 20'000'000 < deadline) {
       ::usleep(20'000);
@@ -720,15 +759,38 @@ std::unique_ptr<Transport> open_socketcand_client(const std::string& host, std::
     }
     error = name + ": cannot connect: " + (e == ETIMEDOUT ? std::string("timed out") : std::string(std::strerror(e))) +
             (e == ECONNREFUSED ? " (nothing listened there within the " + seconds_text(timeout_s) + " s it waits)" : "");
-    return nullptr;
+    return -1;
   }
-  set_nodelay(fd);
-  auto client = std::make_unique<Client>(fd, name);
-  if (!client->handshake(channel, deadline, error)) {
+}
+
+std::unique_ptr<Transport> open_socketcand_client(const std::string& host, std::uint16_t port,
+                                                  const std::string& channel, double timeout_s, std::string& error) {
+  const std::string name = "socketcand:" + host + ":" + std::to_string(port);
+  sockaddr_storage addr{};
+  socklen_t len = 0;
+  if (!resolve(host, port, false, addr, len, error)) {
     error = name + ": " + error;
     return nullptr;
   }
-  return client;
+  const std::int64_t deadline = now_ns() + static_cast<std::int64_t>(timeout_s * 1e9);
+  for (;;) {
+    // A plant that is still loading its scenario does not listen yet: a refused connection is
+    // tried again every 20 ms until the deadline (an ECU started next to its plant needs no sleep).
+    const int fd = connect_until(addr, len, deadline, name, timeout_s, error);
+    if (fd < 0) return nullptr;
+    set_nodelay(fd);
+    auto client = std::make_unique<Client>(fd, name);
+    if (client->handshake(channel, deadline, error)) return client;
+    // a plant whose client slots are all taken closes at once: tried again every 200 ms
+    const bool refused = client->refused();
+    client.reset();
+    if (refused && now_ns() + 200'000'000 < deadline) {
+      ::usleep(200'000);
+      continue;
+    }
+    error = name + ": " + error + (refused ? " (tried again for the " + seconds_text(timeout_s) + " s it waits)" : "");
+    return nullptr;
+  }
 }
 
 }  // namespace ehpt::io::can

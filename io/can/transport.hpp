@@ -23,6 +23,7 @@ struct TransportCounters {
   std::int64_t peers_connected = 0; // socketcand: clients that completed the handshake
   std::int64_t peers_lost = 0;      // socketcand: clients that went away
   std::int64_t peers_refused = 0;   // socketcand: connections refused (every slot taken)
+  std::int64_t peers_evicted = 0;   // socketcand: listeners that never sent, dropped for a new client
 };
 
 class Transport {

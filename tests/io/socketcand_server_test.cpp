@@ -9,9 +9,11 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
+#include <span>
 #include <string>
 #include <thread>
 #include <vector>
@@ -128,6 +130,108 @@ std::string read_until(int fd, const std::string& want) {
     if (n <= 0) std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
   return text;
+}
+
+// A raw-mode client on the server: connected, greeted, opened; its fd.
+int raw_client(Transport& server, std::uint16_t port) {
+  const int fd = connect_to(port);
+  Frame none[4];
+  const auto pump_until = [&](const std::string& want) {
+    std::string got;
+    for (int i = 0; i < 200 && got.find(want) == std::string::npos; ++i) {
+      server.receive(none);
+      got += read_until(fd, want);
+    }
+    return got;
+  };
+  EXPECT_NE(pump_until("< hi >").find("< hi >"), std::string::npos);
+  const std::string open = "< open can0 >";
+  ::send(fd, open.data(), open.size(), 0);
+  EXPECT_NE(pump_until("< ok >").find("< ok >"), std::string::npos);
+  const std::string raw = "< rawmode >";
+  ::send(fd, raw.data(), raw.size(), 0);
+  EXPECT_NE(pump_until("< ok >").find("< ok >"), std::string::npos);
+  return fd;
+}
+
+// One client flooding the bus (unknown ids, as fast as it can) cannot keep another's frame
+// out: it holds at most its share of the plant's ring, so the other's frame comes within a
+// few shares, not after the whole flood.
+TEST(SocketcandServer, AFloodingClientCannotKeepAnotherOut) {
+  const std::uint16_t port = free_port();
+  std::string error;
+  auto server = open_socketcand_server("127.0.0.1", port, error);
+  ASSERT_TRUE(server) << error;
+  const int flood = raw_client(*server, port);
+  const int ecu = raw_client(*server, port);
+  std::atomic<bool> stop{false};
+  std::atomic<long> flooded{0};
+  std::thread flooder([&] {
+    const std::string f = "< send 7FF 1 00 > ";
+    std::string chunk;
+    for (int i = 0; i < 256; ++i) chunk += f;
+    while (!stop.load() && flooded.load() < 40000) {
+      const ssize_t n = ::send(flood, chunk.data(), chunk.size(), MSG_DONTWAIT | MSG_NOSIGNAL);
+      if (n > 0) flooded += n / static_cast<long>(f.size());
+      if (n <= 0) std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+  });
+  while (flooded.load() < 8000) std::this_thread::sleep_for(std::chrono::milliseconds(1));  // a flood in the pipe
+  // the plant reads (without taking frames) until the flood has filled what it may of the ring
+  for (int i = 0; i < 200; ++i) {
+    server->receive(std::span<Frame>());
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  const std::string mine = "< send 123 1 AA > ";
+  ASSERT_EQ(::send(ecu, mine.data(), mine.size(), 0), static_cast<ssize_t>(mine.size()));
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  long before = 0;
+  bool seen = false;
+  Frame out[64];
+  for (int round = 0; round < 100000 && !seen; ++round) {
+    const std::size_t n = server->receive(out);
+    for (std::size_t i = 0; i < n && !seen; ++i) {
+      if (out[i].id == 0x123) {
+        seen = true;
+      } else {
+        ++before;
+      }
+    }
+    if (n == 0) server->wait(1'000'000);
+  }
+  stop = true;
+  flooder.join();
+  EXPECT_TRUE(seen);
+  // each client holds at most 256 frames of the ring: the flood's are ahead by at most that
+  // (and what one pump took); without the share it was every flood frame buffered (> 8000)
+  EXPECT_LT(before, 1024) << before << " flood frames came first";
+  ::close(flood);
+  ::close(ecu);
+}
+
+// Every slot held by listeners that never send (raw mode, silent): a new client makes the one
+// silent the longest give up its slot once it has been silent 5 s, and ehpt's client, refused
+// until then, tries again by itself.
+TEST(SocketcandServer, SilentListenersMakeRoomForAnEcu) {
+  const std::uint16_t port = free_port();
+  std::string error;
+  auto server = open_socketcand_server("127.0.0.1", port, error);
+  ASSERT_TRUE(server) << error;
+  std::vector<int> listeners;
+  for (int i = 0; i < 8; ++i) listeners.push_back(raw_client(*server, port));
+  std::unique_ptr<Transport> ecu;
+  std::thread client([&] { ecu = open_socketcand_client("127.0.0.1", port, "can0", 9.0, error); });
+  const auto start = std::chrono::steady_clock::now();
+  Frame none[4];
+  while (!ecu && std::chrono::steady_clock::now() - start < std::chrono::seconds(9)) {
+    server->wait(20'000'000);
+    server->receive(none);
+  }
+  client.join();
+  EXPECT_TRUE(ecu) << error;
+  EXPECT_EQ(server->counters().peers_evicted, 1);
+  EXPECT_GE(server->counters().peers_refused, 1);  // refused before the 5 s, tried again
+  for (int fd : listeners) ::close(fd);
 }
 
 // The session's end is an orderly close: the client reads to the end of the stream (recv 0),
