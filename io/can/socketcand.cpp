@@ -12,6 +12,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <chrono>
@@ -469,6 +470,14 @@ class Server final : public Transport {
           ++counters_.error_frames;
         }
         return false;
+      case SocketcandMessage::kBadChannel:
+        // as socketcand: no such bus. Queued, not written at once: no call may block the loop
+        ++counters_.error_frames;
+        if (!c.stream.queue("< error could not open bus >", 28)) ++counters_.send_dropped;
+        return false;
+      case SocketcandMessage::kEcho:
+        if (!c.stream.queue("< echo >", 8)) ++counters_.send_dropped;
+        return false;
       case SocketcandMessage::kRawmode:
         if (c.state == State::kOpen && c.stream.write_alone("< ok >")) {
           c.state = State::kRaw;
@@ -657,7 +666,15 @@ SocketcandMessage parse_socketcand(std::string_view m, Frame& frame) {
   if (word == "hi") return SocketcandMessage::kHi;
   if (word == "ok") return SocketcandMessage::kOk;
   if (word == "rawmode") return SocketcandMessage::kRawmode;
-  if (word == "open") return next_token(body).empty() ? SocketcandMessage::kMalformed : SocketcandMessage::kOpen;
+  if (word == "echo") return next_token(body).empty() ? SocketcandMessage::kEcho : SocketcandMessage::kMalformed;
+  if (word == "open") {
+    const std::string_view channel = next_token(body);
+    if (channel.empty() || !next_token(body).empty()) return SocketcandMessage::kMalformed;
+    const bool name_ok = channel.size() <= 15 && std::all_of(channel.begin(), channel.end(), [](char c) {
+      return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '-' || c == '.';
+    });
+    return name_ok ? SocketcandMessage::kOpen : SocketcandMessage::kBadChannel;
+  }
   if (word == "error") return SocketcandMessage::kError;
   Frame f;
   if (word == "send") {  // < send ID LEN B0 B1 ... >

@@ -29,7 +29,10 @@ std::unique_ptr<Transport> open_socketcand_client(const std::string& host, std::
                                                   const std::string& channel, double timeout_s, std::string& error);
 
 // Pure, for the tests: one message of the protocol, "< ... >", parsed. kFrame fills frame.
-enum class SocketcandMessage { kFrame, kSend, kOpen, kRawmode, kHi, kOk, kError, kOther, kMalformed };
+// kOpen: "< open CHANNEL >" with a channel name socketcand would take (1..15 of letters,
+// digits, '_', '-', '.'); kBadChannel: one it would not; kEcho: "< echo >" (socketcand answers
+// it with the same: a client's keep-alive).
+enum class SocketcandMessage { kFrame, kSend, kOpen, kBadChannel, kEcho, kRawmode, kHi, kOk, kError, kOther, kMalformed };
 SocketcandMessage parse_socketcand(std::string_view message, Frame& frame);
 
 }  // namespace ehpt::io::can

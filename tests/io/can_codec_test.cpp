@@ -1432,8 +1432,14 @@ TEST(Socketcand, MalformedMessagesAndOtherKinds) {
   EXPECT_EQ(parse_socketcand("< ok >", f), SocketcandMessage::kOk);
   EXPECT_EQ(parse_socketcand("< rawmode >", f), SocketcandMessage::kRawmode);
   EXPECT_EQ(parse_socketcand("< open vcan0 >", f), SocketcandMessage::kOpen);
+  EXPECT_EQ(parse_socketcand("< open can_1.a-b >", f), SocketcandMessage::kOpen);
+  EXPECT_EQ(parse_socketcand("< open can/0 >", f), SocketcandMessage::kBadChannel);
+  EXPECT_EQ(parse_socketcand("< open abcdefghijklmnop >", f), SocketcandMessage::kBadChannel);  // 16 characters
+  EXPECT_EQ(parse_socketcand("< open a b >", f), SocketcandMessage::kMalformed);
+  EXPECT_EQ(parse_socketcand("< echo >", f), SocketcandMessage::kEcho);
+  EXPECT_EQ(parse_socketcand("< echo x >", f), SocketcandMessage::kMalformed);
   EXPECT_EQ(parse_socketcand("< error could not open bus >", f), SocketcandMessage::kError);
-  EXPECT_EQ(parse_socketcand("< echo >", f), SocketcandMessage::kOther);
+  EXPECT_EQ(parse_socketcand("< bcmode x >", f), SocketcandMessage::kOther);
   EXPECT_EQ(parse_socketcand("< bcmode >", f), SocketcandMessage::kOther);
 }
 

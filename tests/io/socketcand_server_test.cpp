@@ -234,6 +234,37 @@ TEST(SocketcandServer, SilentListenersMakeRoomForAnEcu) {
   for (int fd : listeners) ::close(fd);
 }
 
+// "< echo >" is answered as socketcand answers it, and a channel name socketcand would refuse
+// gets its error (not an "< ok >" for a bus that is not there).
+TEST(SocketcandServer, EchoIsAnsweredAndABadChannelIsRefused) {
+  const std::uint16_t port = free_port();
+  std::string error;
+  auto server = open_socketcand_server("127.0.0.1", port, error);
+  ASSERT_TRUE(server) << error;
+  Frame none[4];
+  const auto pump_until = [&](int fd, const std::string& want) {
+    std::string got;
+    for (int i = 0; i < 200 && got.find(want) == std::string::npos; ++i) {
+      server->receive(none);
+      got += read_until(fd, want);
+    }
+    return got;
+  };
+  const int ok = raw_client(*server, port);
+  const std::string echo = "< echo >";
+  ASSERT_EQ(::send(ok, echo.data(), echo.size(), 0), static_cast<ssize_t>(echo.size()));
+  EXPECT_NE(pump_until(ok, "< echo >").find("< echo >"), std::string::npos);
+  const int bad = connect_to(port);
+  ASSERT_NE(pump_until(bad, "< hi >").find("< hi >"), std::string::npos);
+  const std::string open = "< open can/0 >";
+  ASSERT_EQ(::send(bad, open.data(), open.size(), 0), static_cast<ssize_t>(open.size()));
+  const std::string reply = pump_until(bad, "< error could not open bus >");
+  EXPECT_NE(reply.find("< error could not open bus >"), std::string::npos) << reply;
+  EXPECT_EQ(reply.find("< ok >"), std::string::npos) << reply;
+  ::close(ok);
+  ::close(bad);
+}
+
 // The session's end is an orderly close: the client reads to the end of the stream (recv 0),
 // never a reset, even with frames it sent that the server never read (closing a socket with
 // unread bytes would send an RST: python-can clients and loggers raise ConnectionResetError).
