@@ -140,7 +140,11 @@ struct Stream {
       return true;
     }
   }
-  // A handshake reply: its own write (python-can compares one whole read with it).
+  // The server's handshake reply, in the run phase too (a client may connect mid-run): queued
+  // and sent without waiting. It goes out as its own write, as python-can needs (it compares
+  // one whole read with "< ok >"), because a client in its handshake is sent nothing else.
+  bool reply(std::string_view s) { return queue(s.data(), s.size()) && flush(); }
+  // The client's handshake message, at start-up: its own write, waiting up to 1 s.
   bool write_alone(std::string_view s) const {
     std::size_t done = 0;
     const std::int64_t deadline = now_ns() + 1'000'000'000;
@@ -428,7 +432,7 @@ class Server final : public Transport {
       slot->stream.in_len = slot->stream.out_len = 0;
       slot->state = State::kHello;
       slot->accepted_ns = now_ns();
-      if (!slot->stream.write_alone("< hi >")) drop(*slot);
+      if (!slot->stream.reply("< hi >")) drop(*slot);
     }
     const std::int64_t now = now_ns();
     // every client in turn, starting one further each pump, each up to its share of the ring
@@ -464,7 +468,7 @@ class Server final : public Transport {
     Frame f;
     switch (parse_socketcand(m, f)) {
       case SocketcandMessage::kOpen:
-        if (c.state == State::kHello && c.stream.write_alone("< ok >")) {
+        if (c.state == State::kHello && c.stream.reply("< ok >")) {
           c.state = State::kOpen;
         } else {
           ++counters_.error_frames;
@@ -479,7 +483,7 @@ class Server final : public Transport {
         if (!c.stream.queue("< echo >", 8)) ++counters_.send_dropped;
         return false;
       case SocketcandMessage::kRawmode:
-        if (c.state == State::kOpen && c.stream.write_alone("< ok >")) {
+        if (c.state == State::kOpen && c.stream.reply("< ok >")) {
           c.state = State::kRaw;
           c.live_after_ns = now + kSettleNs;
           c.sent_frames = 0;
