@@ -30,7 +30,7 @@ namespace {
 const char* kPlantHelp =
     "usage: ehpt plant SCENARIO --bus SPEC [--lockstep] [--out DIR] [--set key=value ...]\n"
     "                  [--command-timeout-s T] [--lockstep-wait-s W] [--ecu-wait-s S]\n"
-    "                  [--allow-degraded] [--quiet]\n"
+    "                  [--allow-degraded] [--bus-log-format candump|asc] [--quiet]\n"
     "                  [--realtime [--period T] [--cpu N] [--priority P]]\n"
     "\n"
     "Runs the scenario's plant without its built-in ECU: an ECU on the bus reads the sensor\n"
@@ -54,6 +54,8 @@ const char* kPlantHelp =
     "  --realtime, --period, --cpu, --priority  the real-time loop, as for 'ehpt run' (instead\n"
     "                   of the plain wall clock; not with --lockstep)\n"
     "  --allow-degraded exit 0 for a degraded session (its status stays \"degraded\")\n"
+    "  --bus-log-format F  asc: bus.asc too (Vector ASC: CANoe, CANalyzer, python-can's\n"
+    "                   ASCReader), each frame with its direction; default candump (bus.log only)\n"
     "  --out, --set, --quiet  as for 'ehpt run'\n"
     "A fault holds the run (reported in PlantStatus) and ends it with exit 3. A session that\n"
     "ran without its ECU is \"degraded\" (summary.json status and degraded, the last line,\n"
@@ -89,7 +91,7 @@ bool parse_positive(const std::string& option, const std::string& text, double& 
 struct BusArgs {
   std::string scenario, out_dir, bus, lcm_prefix = "EHPT_";
   std::vector<std::string> sets;
-  bool lockstep = false, quiet = false, allow_degraded = false;
+  bool lockstep = false, quiet = false, allow_degraded = false, asc_log = false;
   double command_timeout_s = 0.0, lockstep_wait_s = 1.0, ecu_wait_s = 60.0, idle_timeout_s = 10.0, max_samples = 0.0;
   // --bus, checked: an LCM URL, or a CAN transport
   bool lcm = false;
@@ -108,7 +110,7 @@ int parse_bus_args(const std::vector<std::string>& args, bool plant, const char*
       }
     }
     const std::string& o = args[i];
-    const bool takes_value = o == "--bus" || o == "--set" || o == "--lcm-prefix" || (plant && (o == "--out" || o == "--command-timeout-s" ||
+    const bool takes_value = o == "--bus" || o == "--set" || o == "--lcm-prefix" || (plant && (o == "--out" || o == "--command-timeout-s" || o == "--bus-log-format" ||
                                                                         o == "--lockstep-wait-s" || o == "--ecu-wait-s")) ||
                              (!plant && (o == "--idle-timeout-s" || o == "--max-samples"));
     if (takes_value && i + 1 >= args.size()) {
@@ -135,6 +137,13 @@ int parse_bus_args(const std::vector<std::string>& args, bool plant, const char*
       a.lockstep = true;
     } else if (plant && o == "--allow-degraded") {
       a.allow_degraded = true;
+    } else if (plant && o == "--bus-log-format") {
+      const std::string& f = args[++i];
+      if (f != "candump" && f != "asc") {
+        std::cerr << "--bus-log-format " << f << ": must be candump or asc\n" << help;
+        return 1;
+      }
+      a.asc_log = f == "asc";
     } else if (plant && o == "--command-timeout-s") {
       if (!parse_positive(o, args[++i], a.command_timeout_s)) return 1;
     } else if (plant && o == "--lockstep-wait-s") {
@@ -169,6 +178,10 @@ int parse_bus_args(const std::vector<std::string>& args, bool plant, const char*
   if (a.lcm ? !ehpt::io::lcm::parse_lcm_spec(a.bus, a.lcm_url, error)
             : !ehpt::io::can::parse_bus_spec(a.bus, a.spec, error)) {
     std::cerr << error << "\n";
+    return 1;
+  }
+  if (a.lcm && a.asc_log) {
+    std::cerr << "--bus-log-format asc: an ASC log is of CAN frames; over LCM record with lcm-logger (docs/lcm.md)\n";
     return 1;
   }
   if (a.lcm && a.lcm_url.rfind("memq://", 0) == 0) {
@@ -221,6 +234,7 @@ int cmd_plant(const std::vector<std::string>& args) {
   bo.lockstep = a.lockstep;
   bo.realtime = a.rt.realtime;
   bo.command_timeout_s = a.command_timeout_s;
+  bo.asc_log = a.asc_log;
   bo.lockstep_wait_s = a.lockstep_wait_s;
   bo.peer_wait_s = a.ecu_wait_s;
   bo.log_interface = a.spec.interface_name;

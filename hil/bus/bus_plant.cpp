@@ -109,6 +109,11 @@ class BusPlant final : public ExternalDriver,
     return t;
   }
 
+  bool finish(std::string& error) override {
+    wire_.finish();
+    return flush(error);
+  }
+
   bool flush(std::string& error) override {
     const bool log_ok = wire_.flush(error);
     inputs_buf_.take_all([&](std::string_view t) { write_inputs(t); });
@@ -414,10 +419,10 @@ std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::can::Tran
   if (!can_run_on_bus(sc, error)) return nullptr;
   if (sc.ecu.holds<ecu::PsdEcuParams>()) {
     using S = msgs::PsdSensors;
-    return std::make_unique<BusPlant<S, CanWire<S>>>(sc, opt, bus, opt.log_interface);
+    return std::make_unique<BusPlant<S, CanWire<S>>>(sc, opt, bus, opt.log_interface, opt.asc_log);
   }
   using S = msgs::EvSensors;
-  return std::make_unique<BusPlant<S, CanWire<S>>>(sc, opt, bus, opt.log_interface);
+  return std::make_unique<BusPlant<S, CanWire<S>>>(sc, opt, bus, opt.log_interface, opt.asc_log);
 }
 
 std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::lcm::LcmBus& bus, const BusPlantOptions& opt,

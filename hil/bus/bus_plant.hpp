@@ -38,6 +38,7 @@ struct BusPlantOptions {
   double lockstep_wait_s = 1.0;
   double peer_wait_s = 60.0;  // wall time to wait for an ECU to connect before t = 0
   std::string log_interface = "can0";  // the interface name in bus.log lines
+  bool asc_log = false;                // CAN: bus.asc (Vector ASC) too, beside bus.log
   std::string lcm_prefix = "EHPT_";    // LCM: channels <prefix>PLANT_STATUS, <prefix>ECU_COMMAND
   // inputs.log's header (hil/bus/session_log.hpp): what `ehpt replay` loads again
   std::string scenario_path;

@@ -2,7 +2,8 @@
 #pragma once
 // The CAN side of the bus plant (hil/bus/bus_plant.cpp): a sample goes out as the frames of
 // io/can/ehpt.dbc, a command comes in as its frames, checked by the codec's rules; every frame
-// in and out goes to bus.log (candump -L). Run phase: no allocation (fixed buffers).
+// in and out goes to bus.log (candump -L) and, if asked, to bus.asc (Vector ASC, with each
+// frame's direction). Run phase: no allocation (fixed buffers).
 
 #include <array>
 #include <cstdint>
@@ -12,6 +13,7 @@
 #include <vector>
 
 #include "hil/bus/bus_family.hpp"
+#include "io/can/asc_log.hpp"
 #include "io/can/candump_log.hpp"
 #include "io/can/codec.hpp"
 #include "io/can/transport.hpp"
@@ -28,18 +30,37 @@ class CanWire {
  public:
   using Command = typename F::Command;
 
-  CanWire(io::can::Transport& bus, std::string log_interface)
-      : bus_(bus), log_interface_(std::move(log_interface)), filter_(F::kCanCommandIds), log_buf_(kLogFlushBytes) {
-    line_.reserve(96 + log_interface_.size());  // one candump line: never more
+  CanWire(io::can::Transport& bus, std::string log_interface, bool asc = false)
+      : bus_(bus),
+        log_interface_(std::move(log_interface)),
+        filter_(F::kCanCommandIds),
+        log_buf_(kLogFlushBytes),
+        asc_(asc),
+        asc_buf_(asc ? kLogFlushBytes : 1) {
+    line_.reserve(96 + log_interface_.size());  // one candump (or ASC) line: never more
   }
 
   // The real-time loop: bus.log is written by its writer thread (background_flush), never by
   // the loop; otherwise by the loop itself once 1 MB has gathered, and between chunks.
   void set_background_writer(bool on) { background_ = on; }
   // The writer thread: the buffer the loop handed over, if any.
-  void background_flush() { log_buf_.take_handed([&](std::string_view t) { write_log(t); }); }
+  void background_flush() {
+    log_buf_.take_handed([&](std::string_view t) { write_log(t); });
+    if (asc_) asc_buf_.take_handed([&](std::string_view t) { write_asc(t); });
+  }
 
-  bool open(const io::OutputDir& dir, std::string& error) { return log_.open(dir.file("bus.log"), error); }
+  bool open(const io::OutputDir& dir, std::string& error) {
+    if (!log_.open(dir.file("bus.log"), error)) return false;
+    if (!asc_) return true;
+    if (!asc_log_.open(dir.file("bus.asc"), error)) return false;
+    asc_start_s_ = wall_time_s();
+    asc_buf_.append(io::can::asc_header(asc_start_s_));
+    return true;
+  }
+  // After the last step: the ASC log's last line.
+  void finish() {
+    if (asc_) asc_buf_.append(io::can::asc_footer());
+  }
   bool has_peer() const { return bus_.has_peer(); }
   void wait(std::int64_t timeout_ns) { bus_.wait(timeout_ns); }
   std::string describe() const { return bus_.describe(); }
@@ -49,7 +70,7 @@ class CanWire {
   void idle() {
     io::can::Frame buf[64];
     while (const std::size_t k = bus_.receive(buf)) {
-      log_frames(std::span<const io::can::Frame>(buf, k));
+      log_frames(std::span<const io::can::Frame>(buf, k), true);
       before_start_ += static_cast<std::int64_t>(k);
     }
   }
@@ -60,7 +81,7 @@ class CanWire {
     std::array<io::can::Frame, F::kCanSensorIds.size()> frames;
     const int saturated = io::can::encode(s, status, tx_, frames);
     for (const auto& f : frames) bus_.send(f);
-    log_frames(frames);
+    log_frames(frames, false);
     received_mask_ = 0;  // a command for this sample: all its frames after these
     return saturated;
   }
@@ -73,7 +94,7 @@ class CanWire {
                                    static_cast<std::uint32_t>(std::min<std::int64_t>(max_age_steps, 0xFFFF))};
     io::can::Frame buf[64];
     while (const std::size_t k = bus_.receive(buf)) {
-      log_frames(std::span<const io::can::Frame>(buf, k));
+      log_frames(std::span<const io::can::Frame>(buf, k), true);
       for (std::size_t i = 0; i < k; ++i) {
         if (filter_.accept(buf[i], &fresh) != io::can::Reject::kNone) continue;
         io::can::apply(buf[i], incoming_);
@@ -98,6 +119,12 @@ class CanWire {
   // write failed or text was dropped (the log is then incomplete).
   bool flush(std::string& error) {
     log_buf_.take_all([&](std::string_view t) { write_log(t); });
+    if (asc_) {
+      asc_buf_.take_all([&](std::string_view t) { write_asc(t); });
+      if (log_error_.empty() && asc_buf_.dropped_bytes() > 0) {
+        log_error_ = "bus.asc: " + std::to_string(asc_buf_.dropped_bytes()) + " bytes dropped (the writer fell behind)";
+      }
+    }
     if (log_error_.empty() && log_buf_.dropped_bytes() > 0) {
       log_error_ = "bus.log: " + std::to_string(log_buf_.dropped_bytes()) + " bytes dropped (the writer fell behind)";
     }
@@ -158,19 +185,27 @@ class CanWire {
   }
   // Every frame in and out; a full buffer is written out by the loop (also while a lockstep
   // wait takes in a flood) or handed to the writer thread. A failure is kept for flush().
-  void log_frames(std::span<const io::can::Frame> frames) {
+  void log_frames(std::span<const io::can::Frame> frames, bool rx) {
     const double t = wall_time_s();
     for (const auto& f : frames) {
       line_.clear();
       io::can::append_candump_line(line_, t, log_interface_, f);
       log_buf_.append(line_);
-      if (!background_ && log_buf_.wants_writer()) background_flush();
+      if (asc_) {
+        line_.clear();
+        io::can::append_asc_line(line_, t - asc_start_s_, f, rx);
+        asc_buf_.append(line_);
+      }
+      if (!background_ && (log_buf_.wants_writer() || (asc_ && asc_buf_.wants_writer()))) background_flush();
     }
   }
   // Whoever writes (the loop or the writer thread, never both at once); after a failure
   // nothing more is written: bus.log is incomplete and the error says so.
   void write_log(std::string_view text) {
     if (log_error_.empty() && !text.empty()) log_.write(text, log_error_);
+  }
+  void write_asc(std::string_view text) {
+    if (log_error_.empty() && !text.empty()) asc_log_.write(text, log_error_);
   }
 
   io::can::Transport& bus_;
@@ -184,7 +219,11 @@ class CanWire {
   io::HandoffBuffer log_buf_;
   std::string line_;       // one candump line (reserved)
   bool background_ = false;
-  std::string log_error_;  // the first failed write of bus.log (or the bytes dropped)
+  std::string log_error_;  // the first failed write of bus.log or bus.asc (or the bytes dropped)
+  bool asc_ = false;       // bus.asc too
+  io::TextFileWriter asc_log_;
+  io::HandoffBuffer asc_buf_;
+  double asc_start_s_ = 0.0;  // wall time of the ASC log's start (its lines count from it)
 };
 
 }  // namespace ehpt::hil

@@ -74,6 +74,7 @@ class LcmWire {
 
   void resync() { last_step_ = -1; }  // a restarted ECU's first command is taken as it is
   bool flush(std::string&) { return true; }
+  void finish() {}
   void set_background_writer(bool) {}  // no log of its own (lcm-logger records LCM)
   void background_flush() {}
 

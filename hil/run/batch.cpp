@@ -682,9 +682,16 @@ BatchResult run_batch(const Scenario& sc, const BatchOptions& opt, std::ostream&
   const Report r = report_of(*sim, opt.realtime != nullptr
                                        ? stream_realtime(*sim, sc, header, columns.size(), csv, opt, log)
                                        : stream(*sim, sc, sink, opt, log));
+  std::string finish_error;
+  if (opt.driver != nullptr && r.run.csv_error.empty()) opt.driver->finish(finish_error);
   conclude(sc, r, opt.driver, res);
   if (opt.driver != nullptr) opt.driver->report(res.summary, res.summary_text);
 
+  if (!finish_error.empty()) {
+    log << "error: " << finish_error << " (the run's files are in " << dir.partial_dir() << ")\n";
+    res.exit_code = 1;
+    return res;
+  }
   if (!r.run.csv_error.empty()) {
     log << "error: " << r.run.csv_error << " (the run's files are in " << dir.partial_dir() << ")\n";
     res.exit_code = 1;

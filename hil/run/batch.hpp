@@ -45,6 +45,8 @@ class ExternalDriver {
   virtual void background_flush() {}
   // Between chunks and at the end: the driver's own files (bus.log); false and error on failure.
   virtual bool flush(std::string& error) = 0;
+  // Once, after the last step: what ends its files (an ASC log's last line), then flush.
+  virtual bool finish(std::string& error) { return flush(error); }
   // The end: its figures, into summary.json ("bus") and onto the terminal.
   virtual void report(io::JsonObject& summary, std::string& text) const = 0;
   // summary.json's provenance: where the commands came from (they are not the built-in ECU's).

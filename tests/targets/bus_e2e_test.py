@@ -176,6 +176,36 @@ class Lockstep(BusTest):
                 checked += 1
         self.assertGreater(checked, 1900)
 
+    def test_the_asc_log_reads_back_in_python_can_as_the_candump_log(self):
+        """--bus-log-format asc: bus.asc beside bus.log, read by python-can's ASCReader: the same
+        frames in the same order, ids, flags and data unchanged, each frame's direction as the
+        plant saw it (the ECU's commands Rx, the plant's sensors Tx), times within 1 ms."""
+        import can
+        port = free_port()
+        out = self.tmp / "asc"
+        plant = self.plant("psecu2_nedc", port, out, "--lockstep", "--bus-log-format", "asc", "--set", "solver.duration_s=2")
+        ecu = self.ecu("psecu2_nedc", port, "--set", "solver.duration_s=2")
+        rc, _, err = self.finish(plant, 60)
+        self.assertEqual(rc, 0, err)
+        self.assertEqual(self.finish(ecu, 30)[0], 0)
+        candump = list(can.CanutilsLogReader(str(out / "bus.log")))
+        asc = list(can.ASCReader(str(out / "bus.asc"), relative_timestamp=False))  # the header's date + each line's time
+        self.assertGreater(len(candump), 1000)
+        self.assertEqual(len(asc), len(candump))
+        commands = {0x110, 0x111}
+        for a, c in zip(asc, candump):
+            self.assertEqual(a.arbitration_id, c.arbitration_id)
+            self.assertFalse(a.is_extended_id)
+            self.assertFalse(a.is_error_frame or a.is_remote_frame)
+            self.assertEqual(bytes(a.data), bytes(c.data))
+            self.assertEqual(a.is_rx, c.arbitration_id in commands, hex(c.arbitration_id))
+            self.assertLess(abs(a.timestamp - c.timestamp), 1.0e-3 + 1e-6)
+        self.assertTrue((out / "bus.asc").read_text().endswith("End TriggerBlock\n"))
+        # over LCM there are no CAN frames to log
+        r = run(["plant", "ev_nedc", "--bus", "lcm:udpm://239.255.76.67:7667?ttl=0", "--bus-log-format", "asc"])
+        self.assertEqual(r.returncode, 1)
+        self.assertIn("an ASC log is of CAN frames", r.stderr)
+
     def test_machine_drive_evs_over_socketcand_are_bit_identical(self):
         """EvPm_bat and EvAm_bat take their torque reference through the EV's command frame:
         plant and follower as two processes in lockstep over socketcand, Sort1 (150 s) ==
