@@ -168,6 +168,7 @@ class Parser {
       const std::size_t before = consumed_;
       try {
         statement();
+        if (consumed_ == before) advance();  // every statement reads a token: never spin in place
       } catch (const ParseError& e) {
         error(line, e.problem);
         if (consumed_ == before) advance();  // never stuck on the statement's first token

@@ -22,6 +22,7 @@
 #include "ecu/psd_ecu.hpp"
 #include "hil/config/config.hpp"
 #include "hil/config/scenario.hpp"
+#include "hil/run/simulation.hpp"
 #include "plant/am_drive.hpp"
 #include "plant/battery_rig.hpp"
 #include "plant/bev_plant.hpp"
@@ -483,6 +484,8 @@ TEST(ReaderRules, EachValueOfTheWrongKindIsNamed) {
            {"psecu2_nedc", {"vehicle.ice.on_off=false"}, "MBecu2 stops the engine through iceON, which this engine ignores",
             true},
            {"evpm_sort1", {"vehicle.drive.speed_max_rad_s=100"}, "above the rating the drive cannot hold its torque", true},
+           // a machine in p.u.: its own fields' problems, named as the file has them
+           {"evam_pu_sort1", {"vehicle.drive.r1_pu=0"}, "drive.r1_pu = 0: must be a finite number > 0"},
        }) {
     expect_reader_rule(c);
   }
@@ -532,6 +535,11 @@ TEST(ReaderRules, EachBrokenFileOrOverrideIsNamed) {
        }) {
     expect_reader_rule(c);
   }
+  // an embedding program's scenario name that names nothing (hil/run/simulation.hpp)
+  std::vector<std::string> sim_errors;
+  EXPECT_EQ(load_simulation("no_such_scenario", {}, SimulationOptions{}, sim_errors), nullptr);
+  ASSERT_EQ(sim_errors.size(), 1u);
+  EXPECT_EQ(sim_errors[0].rfind("no_such_scenario: ", 0), 0u) << sim_errors[0];
   // a cycle given as arrays (the Python module's): both the same length
   Scenario sc;
   std::vector<std::string> errors;
