@@ -223,8 +223,10 @@ bool add_to_manifest(const std::string& dir, const std::vector<std::string>& nam
 // name near 255 bytes, which is a valid folder name), DIR's name cut short and told apart by a
 // hash of the whole name. Still beside DIR, and the same for the same DIR, so that the lock
 // of a second run with the same --out is the first one's.
-static std::string beside(const std::string& final_dir, const std::string& suffix) {
+static std::string beside(std::string final_dir, const std::string& suffix) {
   constexpr std::size_t kNameMax = 255;
+  // "out/run/" is the folder "out/run": its lock is beside it, not inside it
+  while (final_dir.size() > 1 && final_dir.back() == '/') final_dir.pop_back();
   const fs::path p(final_dir);
   const std::string name = p.filename().string();
   if (name.size() + suffix.size() <= kNameMax) return final_dir + suffix;

@@ -303,10 +303,12 @@ class BusPlant final : public ExternalDriver,
   }
 
   // Everything received; each complete, fresh command goes to the plant. True if one did.
-  // Lockstep: the command of this sample only; wall clock: one no older than the timeout.
+  // Lockstep: the command of this sample only; wall clock, and lockstep after it stopped
+  // waiting: one no older than the timeout (so that an ECU that comes back is heard: its
+  // answer arrives after the plant, not waiting, has sent the next sample).
   bool drain(std::int64_t n, Command& command) {
     bool applied = false;
-    wire_.receive(std::max<std::int64_t>(last_sample_, 0), opt_.lockstep ? 0 : timeout_steps_,
+    wire_.receive(std::max<std::int64_t>(last_sample_, 0), opt_.lockstep && !gave_up_waiting_ ? 0 : timeout_steps_,
                   [&](const Command& c) {
                     apply_command(n, c, command);
                     applied = true;

@@ -153,6 +153,7 @@ class CanWire {
     b.object("rejected", rej);
     b.integer("frames_lost", rx.lost);
     b.integer("send_dropped", tc.send_dropped);
+    b.integer("slow_client_drops", tc.slow_drops);
     b.integer("error_frames", tc.error_frames);
     b.integer("peers_connected", tc.peers_connected);
     b.integer("peers_lost", tc.peers_lost);
@@ -163,8 +164,10 @@ class CanWire {
   // Why the bus itself degraded the session (ExternalDriver::degraded_reasons).
   void degraded_reasons(std::vector<std::string>& why) const {
     const io::can::TransportCounters& tc = bus_.counters();
-    if (tc.error_frames > 0) {
-      why.push_back(std::to_string(tc.error_frames) + " error frames or protocol errors on the bus");
+    // CAN error frames degrade the session; socketcand's protocol errors are other clients'
+    // (a port probe, a stray tool) and are counted, not held against the session
+    if (tc.error_frames > 0 && bus_.describe().rfind("socketcand:", 0) != 0) {
+      why.push_back(std::to_string(tc.error_frames) + " error frames on the bus");
     }
     if (tc.send_dropped > 0) {
       why.push_back(std::to_string(tc.send_dropped) + " frames the plant could not send (no ECU connected, or one too slow)");

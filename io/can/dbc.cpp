@@ -8,6 +8,7 @@
 #include <map>
 #include <set>
 #include <tuple>
+#include <unordered_map>
 
 #include "io/text_file.hpp"
 
@@ -256,13 +257,16 @@ class Parser {
     advance();
   }
 
-  std::string statement_text(int line) const {
-    std::size_t pos = 0;
-    for (int l = 1; l < line && pos != std::string_view::npos; ++l) {
-      pos = text_.find('\n', pos);
-      if (pos != std::string_view::npos) ++pos;
+  std::string statement_text(int line) {
+    if (line_starts_.empty()) {  // once, on the first problem: each problem is then one lookup
+      line_starts_.push_back(0);
+      for (std::size_t i = 0; i < text_.size(); ++i) {
+        if (text_[i] == '\n') line_starts_.push_back(i + 1);
+      }
     }
-    if (pos == std::string_view::npos || pos >= text_.size()) return "";
+    if (line < 1 || static_cast<std::size_t>(line) > line_starts_.size()) return "";
+    const std::size_t pos = line_starts_[static_cast<std::size_t>(line) - 1];
+    if (pos >= text_.size()) return "";
     std::string_view s = text_.substr(pos, text_.find('\n', pos) - pos);
     while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
     while (!s.empty() && (s.back() == '\r' || s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
@@ -601,14 +605,20 @@ class Parser {
   DbcSignal* find(std::int64_t raw_id, const std::string& signal, int line, const std::string& what) {
     DbcMessage* m = find(raw_id, line, what);
     if (m == nullptr) return nullptr;
-    for (DbcSignal& s : m->signals) {
-      if (s.name == signal) return &s;
-    }
+    const auto& index = signal_index_[static_cast<std::size_t>(m - out_.messages.data())];
+    if (const auto it = index.find(signal); it != index.end()) return &m->signals[it->second];
     warning(line, what + " of signal " + signal + ", which message " + m->name + " does not have; ignored");
     return nullptr;
   }
+  // signal lookups by name: an index per message, built once before the attributes are applied
+  std::vector<std::unordered_map<std::string, std::size_t>> signal_index_;
 
   void apply_attributes() {
+    signal_index_.resize(out_.messages.size());
+    for (std::size_t i = 0; i < out_.messages.size(); ++i) {
+      const auto& signals = out_.messages[i].signals;
+      for (std::size_t k = 0; k < signals.size(); ++k) signal_index_[i].emplace(signals[k].name, k);  // the first of a name
+    }
     for (const auto& tx : tx_nodes_) {
       DbcMessage* m = find(tx.id, tx.line, "BO_TX_BU_");
       if (m == nullptr) continue;
@@ -727,6 +737,14 @@ class Parser {
   }
   // two signals present at the same time that share a bit: legal in a DBC, nearly always a typo
   void overlaps(const DbcMessage& m) {
+    // a real message has at most a few hundred signals (512 bits; multiplexed pages add some):
+    // beyond that the pairwise check would cost more than the file is worth
+    constexpr std::size_t kMaxChecked = 1024;
+    if (m.signals.size() > kMaxChecked) {
+      warning(m.line, m.name + " has " + std::to_string(m.signals.size()) + " signals; overlaps are checked for " +
+                          std::to_string(kMaxChecked) + " at most, so not for it");
+      return;
+    }
     std::vector<std::vector<std::size_t>> owners(static_cast<std::size_t>(8 * m.size_bytes));  // signals per bit
     for (std::size_t j = 0; j < m.signals.size() && out_.warnings.size() < kMaxProblems; ++j) {
       const DbcSignal& b = m.signals[j];
@@ -800,6 +818,7 @@ class Parser {
   };
 
   std::string_view text_;
+  std::vector<std::size_t> line_starts_;  // where each line begins (statement_text)
   Lexer lex_;
   Dbc& out_;
   Token cur_;
@@ -971,7 +990,12 @@ std::uint64_t physical_to_raw(const DbcSignal& s, double physical) {
     std::memcpy(&bits, &scaled, sizeof bits);
     return bits;
   }
-  const double r = std::nearbyint(scaled);
+  double r = std::nearbyint(scaled);
+  if (s.has_range()) {  // rounding to a step may leave [min, max] (factor 0.5, max 10.3: 10.5): one step back
+    const double step = s.factor > 0.0 ? 1.0 : -1.0;
+    if (r * s.factor + s.offset > s.max) r -= step;
+    if (r * s.factor + s.offset < s.min) r += step;
+  }
   // the raw range as doubles: exact up to 53 bits, and the comparisons below keep every cast defined
   if (s.is_signed) {
     const double lo = -std::ldexp(1.0, s.length - 1), hi = std::ldexp(1.0, s.length - 1);  // [lo, hi)

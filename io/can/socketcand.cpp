@@ -131,7 +131,8 @@ struct Stream {
   bool finish_close() {
     if (fd < 0) return true;
     char sink[4096];
-    for (;;) {
+    for (int reads = 0;; ++reads) {
+      if (reads == 64) return false;  // a peer that keeps sending: the caller's deadline decides
       const ssize_t n = ::recv(fd, sink, sizeof sink, MSG_DONTWAIT);
       if (n > 0) continue;
       if (n < 0 && errno == EINTR) continue;
@@ -350,7 +351,7 @@ class Server final : public Transport {
       if (c.stream.queue(buf, n)) {
         sent = true;
       } else {
-        ++counters_.send_dropped;  // this client is too slow: its buffer is full
+        ++counters_.slow_drops;  // this client is too slow: its buffer is full (the others got it)
       }
       if (!c.stream.flush()) drop(c);
     }
@@ -534,7 +535,7 @@ class Server final : public Transport {
     const std::size_t n = format_frame(buf, sizeof buf, f, wall_time_s());
     for (auto& c : clients_) {
       if (&c == &from || !live(c, now)) continue;
-      if (!c.stream.queue(buf, n)) ++counters_.send_dropped;
+      if (!c.stream.queue(buf, n)) ++counters_.slow_drops;
     }
   }
 

@@ -17,8 +17,9 @@ namespace ehpt::io::can {
 struct TransportCounters {
   std::int64_t frames_in = 0;       // data frames received and handed out
   std::int64_t frames_out = 0;      // data frames sent
-  std::int64_t send_dropped = 0;    // not sent: TX queue full, no peer, peer too slow
-  std::int64_t error_frames = 0;    // CAN error frames (SocketCAN), protocol errors (socketcand)
+  std::int64_t send_dropped = 0;    // not sent: TX queue full, no peer (nobody got the frame)
+  std::int64_t slow_drops = 0;      // socketcand: a frame one client did not get (its buffer full), others did
+  std::int64_t error_frames = 0;    // CAN error frames (SocketCAN), protocol errors of clients (socketcand)
   std::int64_t rx_malformed = 0;    // received text or frames that are not a classic data frame
   std::int64_t peers_connected = 0; // socketcand: clients that completed the handshake
   std::int64_t peers_lost = 0;      // socketcand: clients that went away

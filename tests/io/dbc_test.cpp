@@ -220,6 +220,22 @@ TEST(Dbc, WarnsOfOverlapsAndReferencesToNothing) {
   EXPECT_NE(all.find("my.dbc:18: BA_ of message 7, which no BO_ defines; ignored"), std::string::npos) << all;
 }
 
+// A message of very many signals (a generated or hostile file) is read in bounded time: the
+// overlap check is skipped for it, with a warning that says so.
+TEST(Dbc, AMessageOfThousandsOfSignalsIsReadWithoutTheOverlapCheck) {
+  std::string body = "BO_ 1 A: 64 Ecu\n SG_ Page M : 480|32@1+ (1,0) [0|0] \"\" Ecu\n";
+  for (int i = 0; i < 3000; ++i) {
+    body += " SG_ s" + std::to_string(i) + " m" + std::to_string(i) + " : 0|64@1+ (1,0) [0|0] \"\" Ecu\n";
+  }
+  for (int i = 0; i < 3000; ++i) body += "VAL_ 1 s" + std::to_string(i) + " 0 \"zero\" ;\n";
+  const Dbc d = parse(body);
+  ASSERT_TRUE(d.ok()) << problems(d);
+  ASSERT_EQ(d.messages[0].signals.size(), 3001u);
+  EXPECT_EQ(d.messages[0].signals[2999].value_names.size(), 1u);
+  ASSERT_EQ(d.warnings.size(), 1u) << problems(d);
+  EXPECT_NE(d.warnings[0].problem.find("A has 3001 signals; overlaps are checked for 1024 at most"), std::string::npos);
+}
+
 TEST(Dbc, AFileIsReadFromDiskOrRefusedWithWhy) {
   const Dbc shipped = load_dbc(test::source_path("io/can/ehpt.dbc"));
   EXPECT_TRUE(shipped.ok()) << problems(shipped);
@@ -320,6 +336,14 @@ TEST(Dbc, EncodeRoundsSaturatesAndLeavesOtherBitsAlone) {
   u.start_value_raw = 300;
   encode(u, std::numeric_limits<double>::quiet_NaN(), data);
   EXPECT_EQ(extract_raw(u, data), 300u);
+  // rounding to a step never leaves the range: factor 0.5, max 10.3 gives 10, not 10.5
+  DbcSignal half = sig(32, 8, ByteOrder::kIntel, false, 0.5, 0);
+  half.min = 0, half.max = 10.3;
+  encode(half, 10.3, data);
+  EXPECT_EQ(decode(half, data), 10.0);
+  half.min = 0.2;
+  encode(half, 0.2, data);
+  EXPECT_EQ(decode(half, data), 0.5);
   DbcSignal big = sig(0, 64, ByteOrder::kIntel);
   EXPECT_EQ(physical_to_raw(big, 1e30), ~std::uint64_t{0});
   EXPECT_EQ(physical_to_raw(big, -5), 0u);

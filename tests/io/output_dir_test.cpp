@@ -79,6 +79,17 @@ TEST(OutputDir, AFolderNameOfTheFullLengthIsAnOutputFolder) {
     EXPECT_EQ(std::distance(fs::directory_iterator(root), fs::directory_iterator()), 1) << length;
     fs::remove_all(dir);
   }
+  // "DIR/" is DIR: the same lock (ehpt plot out/run/ against ehpt run --out out/run)
+  {
+    const std::string d = (root / "slash").string();
+    OutputDir run;
+    std::string e;
+    ASSERT_TRUE(run.open(d, e)) << e;
+    DirLock plot;
+    EXPECT_FALSE(plot.acquire(d + "/", e));
+    EXPECT_NE(e.find("another ehpt run is writing this folder"), std::string::npos) << e;
+    EXPECT_FALSE(fs::exists(d + "/.ehpt-lock"));
+  }
   // a second run with the same long name finds the first one's lock
   const std::string dir = (root / std::string(255, 'q')).string();
   OutputDir first, second;
