@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "io/can/candump_log.hpp"
 #include "io/can/dbc.hpp"
 #include "io/json_writer.hpp"
 #include "io/number_format.hpp"
@@ -127,13 +128,6 @@ std::string message_text(const can::DbcMessage& m) {
   return t;
 }
 
-int hex_digit(char c) {
-  if (c >= '0' && c <= '9') return c - '0';
-  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
-  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
-  return -1;
-}
-
 struct ParsedFrame {
   std::uint32_t id = 0;
   bool extended = false;
@@ -149,7 +143,7 @@ std::string parse_frame(std::string text, ParsedFrame& f) {
   if (hash == std::string::npos || hash == 0 || hash > 8) return "expected ID#DATA (hex), as candump writes it";
   std::uint32_t id = 0;
   for (std::size_t i = 0; i < hash; ++i) {
-    const int d = hex_digit(text[i]);
+    const int d = can::hex_digit_value(text[i]);
     if (d < 0) return "the id '" + text.substr(0, hash) + "' is not hex";
     id = id * 16 + static_cast<std::uint32_t>(d);
   }
@@ -166,7 +160,7 @@ std::string parse_frame(std::string text, ParsedFrame& f) {
   if (data.size() / 2 > static_cast<std::size_t>(can::kMaxDbcPayloadBytes)) return "more than 64 data bytes";
   f.data.clear();
   for (std::size_t i = 0; i < data.size(); i += 2) {
-    const int hi = hex_digit(data[i]), lo = hex_digit(data[i + 1]);
+    const int hi = can::hex_digit_value(data[i]), lo = can::hex_digit_value(data[i + 1]);
     if (hi < 0 || lo < 0) return "the data '" + data + "' is not hex";
     f.data.push_back(static_cast<std::uint8_t>(hi * 16 + lo));
   }
@@ -249,21 +243,7 @@ int cmd_dbc(const std::vector<std::string>& args) {
               << "; fix the DBC (nothing decoded)\n";
     return 2;
   }
-  if (!frames_path.empty()) {
-    std::ifstream file;
-    if (frames_path != "-") {
-      file.open(frames_path);
-      if (!file) {
-        std::cerr << "error: --frames " << frames_path << ": cannot open it\n";
-        return 2;
-      }
-    }
-    std::istream& in = frames_path == "-" ? std::cin : file;
-    for (std::string line; std::getline(in, line);) {
-      if (!line.empty() && line.find('#') != std::string::npos) frames.push_back(line);
-    }
-  }
-  if (frames.empty()) {
+  if (frames.empty() && frames_path.empty()) {
     std::string text;
     std::size_t signals = 0;
     for (const auto& m : dbc.messages) signals += m.signals.size();
@@ -285,26 +265,55 @@ int cmd_dbc(const std::vector<std::string>& args) {
     }
     return out(text) ? 0 : 1;
   }
+  // Decoding: the frames of the command line, then those of --frames, streamed (a log of any
+  // size is read a line at a time, its decoded lines written out as they gather)
+  std::ifstream file;
+  if (!frames_path.empty() && frames_path != "-") {
+    file.open(frames_path);
+    if (!file) {
+      std::cerr << "error: --frames " << frames_path << ": cannot open it\n";
+      return 2;
+    }
+  }
   std::string text;
-  int bad = 0;
-  for (std::size_t k = 0; k < frames.size(); ++k) {
+  std::size_t seen = 0, bad = 0;
+  const auto decode_one = [&](const std::string& frame) {
+    ++seen;
     ParsedFrame f;
-    std::string problem = parse_frame(frames[k], f);
+    std::string problem = parse_frame(frame, f);
     const can::DbcMessage* m = problem.empty() ? dbc.message(f.id, f.extended) : nullptr;
     if (problem.empty() && m == nullptr) problem = "no message of " + path + " has this id";
     if (m != nullptr && f.data.size() < static_cast<std::size_t>(m->size_bytes)) {
       problem = std::to_string(f.data.size()) + " data bytes; " + m->name + " has " + std::to_string(m->size_bytes);
     }
     if (!problem.empty()) {
-      std::cerr << "frame " << (k + 1) << " '" << frames[k] << "': " << problem << "\n";
-      ++bad;
-      continue;
+      if (++bad <= 100) std::cerr << "frame " << seen << " '" << frame.substr(0, 200) << "': " << problem << "\n";
+      return true;
     }
     text += decode_line(*m, f, json);
+    if (text.size() < (1u << 16)) return true;
+    const bool written = out(text);
+    text.clear();
+    return written;
+  };
+  for (const std::string& frame : frames) {
+    if (!decode_one(frame)) return 1;
+  }
+  if (!frames_path.empty()) {
+    std::istream& in = frames_path == "-" ? std::cin : file;
+    for (std::string line; std::getline(in, line);) {
+      if (line.find('#') == std::string::npos) continue;  // a candump log's other lines
+      if (!decode_one(line)) return 1;
+    }
   }
   if (!out(text)) return 1;
   if (bad > 0) {
-    std::cerr << "error: " << bad << " of " << frames.size() << " frames not decoded\n";
+    std::cerr << "error: " << bad << " of " << seen << " frames not decoded" << (bad > 100 ? " (the first 100 shown)" : "")
+              << "\n";
+    return 2;
+  }
+  if (seen == 0) {  // asked to decode, given nothing: not a success
+    std::cerr << "error: --frames " << frames_path << ": no frame (ID#DATA) in it\n";
     return 2;
   }
   return 0;

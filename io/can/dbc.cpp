@@ -10,6 +10,7 @@
 #include <tuple>
 #include <unordered_map>
 
+#include "io/number_format.hpp"
 #include "io/text_file.hpp"
 
 namespace ehpt::io::can {
@@ -457,7 +458,7 @@ class Parser {
     }
     if (owner_ == Owner::kDropped) return;
     if (s.factor == 0.0) throw ParseError{"factor 0: every raw value would decode to the offset"};
-    if (s.min > s.max) throw ParseError{"minimum " + short_number(s.min) + " is above the maximum " + short_number(s.max)};
+    if (s.min > s.max) throw ParseError{"minimum " + number_text(s.min) + " is above the maximum " + number_text(s.max)};
     out_.messages.back().signals.push_back(std::move(s));
   }
 
@@ -689,11 +690,11 @@ class Parser {
       if (v.number >= 0 && v.number < static_cast<double>(d->second.values.size()) && v.number == std::floor(v.number)) {
         return d->second.values[static_cast<std::size_t>(v.number)];
       }
-      error(v.line, name + " = " + short_number(v.number) + " is no index of its ENUM (0.." +
+      error(v.line, name + " = " + number_text(v.number) + " is no index of its ENUM (0.." +
                         std::to_string(static_cast<long long>(d->second.values.size()) - 1) + ")");
       return "";
     }
-    return short_number(v.number);
+    return number_text(v.number);
   }
   void set_cycle_time(DbcMessage& m, const AttrValue& v) {
     if (v.is_string || !(v.number >= 0 && v.number <= 3600000 && v.number == std::floor(v.number))) {
@@ -786,11 +787,6 @@ class Parser {
     std::string s(buf, r.ptr);
     for (char& c : s) c = static_cast<char>(c >= 'a' && c <= 'f' ? c - 'a' + 'A' : c);
     return s;
-  }
-  static std::string short_number(double v) {
-    char buf[32];
-    const auto r = std::to_chars(buf, buf + sizeof buf, v);
-    return std::string(buf, r.ptr);
   }
 
   struct Comment {

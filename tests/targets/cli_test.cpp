@@ -1468,6 +1468,13 @@ TEST(CliDbc, ChecksListsAndDecodes) {
   EXPECT_HAS(r.err, "frame 1 '7FF#00': no message of " + dbc + " has this id");
   EXPECT_HAS(r.err, "frame 2 '100#00': 1 data bytes; EngineCmd has 8");
   EXPECT_HAS(r.err, "error: 2 of 2 frames not decoded");
+  // asked to decode a file without a frame: an error, not the message list with exit 0
+  const std::string none = (root / "none.log").string();
+  std::ofstream(none) << "no frames here\n";
+  r = ehpt_argv({"dbc", dbc, "--frames", none});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_HAS(r.err, "error: --frames " + none + ": no frame (ID#DATA) in it");
+  EXPECT_EQ(r.out, "");
 }
 
 // 'ehpt list' and 'ehpt plot' say every place they look, then where this ehpt found its folder.
