@@ -26,8 +26,11 @@ std::string asc_header(double start_s) {
 
 void append_asc_line(std::string& out, double t_s, const Frame& f, bool rx) {
   char buf[96];
-  int n = std::snprintf(buf, sizeof buf, "%11.6f 1  %-15X %s   d %u", t_s < 0.0 ? 0.0 : t_s, static_cast<unsigned>(f.id),
-                        rx ? "Rx" : "Tx", static_cast<unsigned>(f.len));
+  // Vector's form: an extended id is written with an "x" after it
+  char id[16];
+  std::snprintf(id, sizeof id, f.extended ? "%Xx" : "%X", static_cast<unsigned>(f.id & kMaxExtendedId));
+  int n = std::snprintf(buf, sizeof buf, "%11.6f 1  %-15s %s   d %u", t_s < 0.0 ? 0.0 : t_s, id, rx ? "Rx" : "Tx",
+                        static_cast<unsigned>(f.len));
   for (int i = 0; i < f.len && i < 8; ++i) {
     n += std::snprintf(buf + n, sizeof buf - static_cast<std::size_t>(n), " %02X", f.data[static_cast<std::size_t>(i)]);
   }

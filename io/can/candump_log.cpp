@@ -15,7 +15,8 @@ void append_candump_line(std::string& out, double time_s, std::string_view inter
   out.append(head, static_cast<std::size_t>(n));
   out.append(interface_name);
   char body[32];
-  int m = std::snprintf(body, sizeof body, " %03X#", static_cast<unsigned>(f.id & kMaxStandardId));
+  int m = f.extended ? std::snprintf(body, sizeof body, " %08X#", static_cast<unsigned>(f.id & kMaxExtendedId))
+                     : std::snprintf(body, sizeof body, " %03X#", static_cast<unsigned>(f.id & kMaxStandardId));
   static const char kHex[] = "0123456789ABCDEF";
   for (int i = 0; i < f.len && i < 8; ++i) {
     body[m++] = kHex[f.data[static_cast<std::size_t>(i)] >> 4];
@@ -68,8 +69,9 @@ bool parse_candump_line(std::string_view line, CandumpLine& out, const char*& wh
   out.interface_name = rest.substr(0, space);
   std::string_view frame = rest.substr(space + 1);
   const std::size_t hash = frame.find('#');
-  if (hash == std::string_view::npos || hash == 0 || hash > 3) {
-    why = "the frame is not ID#DATA with a standard (3-digit) id";
+  // candump's rule: up to 3 hex digits are a standard id, 8 an extended one
+  if (hash == std::string_view::npos || hash == 0 || (hash > 3 && hash != 8)) {
+    why = "the frame is not ID#DATA with a 3-digit (standard) or 8-digit (extended) id";
     return false;
   }
   std::uint32_t id = 0;
@@ -88,6 +90,7 @@ bool parse_candump_line(std::string_view line, CandumpLine& out, const char*& wh
   }
   Frame f;
   f.id = id;
+  f.extended = hash == 8;
   f.len = static_cast<std::uint8_t>(data.size() / 2);
   for (std::size_t i = 0; i < f.len; ++i) {
     const int hi = hex_digit_value(data[2 * i]), lo = hex_digit_value(data[2 * i + 1]);
@@ -97,8 +100,8 @@ bool parse_candump_line(std::string_view line, CandumpLine& out, const char*& wh
     }
     f.data[i] = static_cast<std::uint8_t>(hi * 16 + lo);
   }
-  if (f.id > kMaxStandardId) {
-    why = "the id is above 0x7FF";
+  if (f.id > (f.extended ? kMaxExtendedId : kMaxStandardId)) {
+    why = f.extended ? "the id is above 0x1FFFFFFF" : "the id is above 0x7FF";
     return false;
   }
   out.time_s = t;

@@ -254,6 +254,7 @@ const char* reject_name(Reject r) {
 Reject check_frame(const Frame& f, std::span<const std::uint32_t> accepted_ids) {
   bool ours = false;
   for (std::uint32_t id : accepted_ids) ours = ours || id == f.id;
+  ours = ours && !f.extended;  // the contract's ids are all standard ones
   const MessageSpec* spec = ours ? find_message(f.id) : nullptr;
   if (spec == nullptr) return Reject::kUnknownId;
   if (f.len != spec->dlc) return Reject::kWrongLength;

@@ -29,10 +29,11 @@
 #include <string_view>
 #include <vector>
 
+#include "io/can/frame.hpp"
+
 namespace ehpt::io::can {
 
 inline constexpr int kMaxDbcPayloadBytes = 64;  // CAN FD
-inline constexpr std::uint32_t kMaxExtendedId = 0x1FFFFFFF;
 
 enum class ByteOrder { kIntel, kMotorola };  // @1 little-endian, @0 big-endian
 enum class SignalValueType { kInteger, kFloat32, kFloat64 };  // SIG_VALTYPE_ 0, 1, 2

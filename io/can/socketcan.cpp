@@ -30,12 +30,12 @@ class SocketCanTransport final : public Transport {
   // Run phase: no allocation.
   bool send(const Frame& frame) override {
     // the contract has 11-bit ids and classic lengths only; anything else cannot go out
-    if (frame.id > kMaxStandardId || frame.len > CAN_MAX_DLEN) {
+    if (frame.id > (frame.extended ? kMaxExtendedId : kMaxStandardId) || frame.len > CAN_MAX_DLEN) {
       ++counters_.send_dropped;
       return false;
     }
     struct can_frame out {};
-    out.can_id = frame.id;
+    out.can_id = frame.extended ? (frame.id | CAN_EFF_FLAG) : frame.id;
     out.len = frame.len;
     std::memcpy(out.data, frame.data.data(), frame.len);
     ssize_t written = -1;
@@ -71,12 +71,13 @@ class SocketCanTransport final : public Transport {
         continue;
       }
       // the filters already drop these; counted in case someone widens them
-      if ((in.can_id & (CAN_EFF_FLAG | CAN_RTR_FLAG)) != 0 || in.len > CAN_MAX_DLEN) {
+      if ((in.can_id & CAN_RTR_FLAG) != 0 || in.len > CAN_MAX_DLEN) {
         ++counters_.rx_malformed;
         continue;
       }
       Frame& frame = out[count++];
-      frame.id = in.can_id & CAN_SFF_MASK;
+      frame.extended = (in.can_id & CAN_EFF_FLAG) != 0;
+      frame.id = in.can_id & (frame.extended ? CAN_EFF_MASK : CAN_SFF_MASK);
       frame.len = in.len;
       frame.data.fill(0);  // bytes beyond len are zero (frame.hpp)
       std::memcpy(frame.data.data(), in.data, in.len);
@@ -124,10 +125,16 @@ std::unique_ptr<Transport> open_socketcan(const std::string& interface_name,
             " characters without '/'";
     return nullptr;
   }
-  // filters: exact 11-bit id, and EFF/RTR flags must be clear (standard data frames only)
+  // filters: the exact id and frame format (an extended one carries kExtendedIdFlag, which is
+  // the kernel's CAN_EFF_FLAG); RTR must be clear (data frames only)
+  static_assert(kExtendedIdFlag == CAN_EFF_FLAG);
   std::vector<struct can_filter> filters;
   filters.reserve(rx_ids.size());
   for (const std::uint32_t id : rx_ids) {
+    if ((id & kExtendedIdFlag) != 0 && (id & ~kExtendedIdFlag) <= kMaxExtendedId) {
+      filters.push_back({id, CAN_EFF_MASK | CAN_EFF_FLAG | CAN_RTR_FLAG});
+      continue;
+    }
     if (id > kMaxStandardId) {
       char hex[16];
       std::snprintf(hex, sizeof hex, "0x%X", id);

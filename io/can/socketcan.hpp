@@ -32,7 +32,8 @@ namespace ehpt::io::can {
 //   "socketcan:vcan9: no such CAN interface"
 //   "socketcan: this kernel has no CAN support (socket(AF_CAN) failed: Address family not
 //    supported by protocol)"
-// The name must be 1..15 characters (IFNAMSIZ - 1) without '/'; every rx id must be <= 0x7FF.
+// The name must be 1..15 characters (IFNAMSIZ - 1) without '/'; every rx id must be <= 0x7FF,
+// or an extended one (<= 0x1FFFFFFF) with kExtendedIdFlag set.
 // An empty rx_ids receives no data frames (error frames are still counted).
 std::unique_ptr<Transport> open_socketcan(const std::string& interface_name,
                                           std::span<const std::uint32_t> rx_ids,

@@ -39,6 +39,10 @@ double wall_time_s() {
 
 
 // A hexadecimal number of 1..max_digits digits; -1 if it is not one.
+// socketcand's rule: an id written with 8 hex digits is a 29-bit one. python-can 4.1 writes ids
+// without leading zeros, so an id above 0x7FF is taken as extended whatever its length.
+bool is_extended_id_text(std::string_view text, long id) { return text.size() == 8 || id > static_cast<long>(kMaxStandardId); }
+
 long parse_hex(std::string_view s, std::size_t max_digits) {
   if (s.empty() || s.size() > max_digits) return -1;
   long v = 0;
@@ -64,8 +68,10 @@ std::string_view next_token(std::string_view& s) {
 // read (a frame lost at every read boundary without it), and warns about a trailing one.
 std::size_t format_frame(char* buf, std::size_t size, const Frame& f, double time_s) {
   const auto us = static_cast<long long>(time_s * 1e6);
-  int n = std::snprintf(buf, size, " < frame %03X %lld.%06lld ", static_cast<unsigned>(f.id & kMaxStandardId),
-                        us / 1000000, us % 1000000);
+  int n = f.extended ? std::snprintf(buf, size, " < frame %08X %lld.%06lld ", static_cast<unsigned>(f.id & kMaxExtendedId),
+                                     us / 1000000, us % 1000000)
+                     : std::snprintf(buf, size, " < frame %03X %lld.%06lld ", static_cast<unsigned>(f.id & kMaxStandardId),
+                                     us / 1000000, us % 1000000);
   static const char kHex[] = "0123456789ABCDEF";
   for (int i = 0; i < f.len && i < 8; ++i) {
     buf[n++] = kHex[f.data[static_cast<std::size_t>(i)] >> 4];
@@ -78,7 +84,8 @@ std::size_t format_frame(char* buf, std::size_t size, const Frame& f, double tim
 
 // "< send 123 8 11 22 33 44 55 66 77 88 >"
 std::size_t format_send(char* buf, std::size_t size, const Frame& f) {
-  int n = std::snprintf(buf, size, "< send %03X %X", static_cast<unsigned>(f.id & kMaxStandardId), f.len);
+  int n = f.extended ? std::snprintf(buf, size, "< send %08X %X", static_cast<unsigned>(f.id & kMaxExtendedId), f.len)
+                     : std::snprintf(buf, size, "< send %03X %X", static_cast<unsigned>(f.id & kMaxStandardId), f.len);
   for (int i = 0; i < f.len && i < 8; ++i) {
     n += std::snprintf(buf + n, size - static_cast<std::size_t>(n), " %02X", f.data[static_cast<std::size_t>(i)]);
   }
@@ -683,10 +690,12 @@ SocketcandMessage parse_socketcand(std::string_view m, Frame& frame) {
   if (word == "error") return SocketcandMessage::kError;
   Frame f;
   if (word == "send") {  // < send ID LEN B0 B1 ... >
-    const long id = parse_hex(next_token(body), 3);
+    const std::string_view id_text = next_token(body);
+    const long id = parse_hex(id_text, 8);
     const long len = parse_hex(next_token(body), 1);
-    if (id < 0 || id > static_cast<long>(kMaxStandardId) || len < 0 || len > 8) return SocketcandMessage::kMalformed;
+    if (id < 0 || id > static_cast<long>(kMaxExtendedId) || len < 0 || len > 8) return SocketcandMessage::kMalformed;
     f.id = static_cast<std::uint32_t>(id);
+    f.extended = is_extended_id_text(id_text, id);
     f.len = static_cast<std::uint8_t>(len);
     for (long i = 0; i < len; ++i) {
       const long b = parse_hex(next_token(body), 2);
@@ -698,14 +707,16 @@ SocketcandMessage parse_socketcand(std::string_view m, Frame& frame) {
     return SocketcandMessage::kSend;
   }
   if (word == "frame") {  // < frame ID SECS.USECS DATA >
-    const long id = parse_hex(next_token(body), 3);
+    const std::string_view id_text = next_token(body);
+    const long id = parse_hex(id_text, 8);
     const std::string_view time = next_token(body);
     const std::string_view data = next_token(body);
-    if (id < 0 || id > static_cast<long>(kMaxStandardId) || time.empty() || data.size() % 2 != 0 || data.size() > 16 ||
+    if (id < 0 || id > static_cast<long>(kMaxExtendedId) || time.empty() || data.size() % 2 != 0 || data.size() > 16 ||
         !next_token(body).empty()) {
       return SocketcandMessage::kMalformed;
     }
     f.id = static_cast<std::uint32_t>(id);
+    f.extended = is_extended_id_text(id_text, id);
     f.len = static_cast<std::uint8_t>(data.size() / 2);
     for (std::size_t i = 0; i < f.len; ++i) {
       const long b = parse_hex(data.substr(2 * i, 2), 2);

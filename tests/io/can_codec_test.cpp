@@ -1340,7 +1340,7 @@ TEST(CandumpLine, MalformedLinesAreRejectedWithAReason) {
       "(1700000000.000000) vcan0 1G3#11",       // bad hex in the id
       "(1700000000.000000) vcan0 123#112",      // odd number of data digits
       "(1700000000.000000) vcan0 123#112233445566778899",  // 9 bytes
-      "(1700000000.000000) vcan0 12345678#11",  // an extended (8-digit) id
+      "(1700000000.000000) vcan0 1234#11",      // a 4-digit id (neither form)
       "(1700000000.000000) vcan0 800#11",       // above 0x7FF
       "(1700000000.000000) vcan0 123",          // no '#'
       "(17000x0000.000000) vcan0 123#11",       // not a time stamp
@@ -1357,12 +1357,28 @@ TEST(CandumpLine, MalformedLinesAreRejectedWithAReason) {
       EXPECT_GT(std::string(why).size(), 5u) << line;
     }
   }
-  // an extended id is refused as such (not as an id that happens to be too large)
+  // an id of 4..7 or 9 digits is neither form
   CandumpLine c;
   const char* why = nullptr;
-  ASSERT_FALSE(parse_candump_line("(1700000000.000000) vcan0 00000123#11", c, why));
+  ASSERT_FALSE(parse_candump_line("(1700000000.000000) vcan0 0000123#11", c, why));
   ASSERT_NE(why, nullptr);
-  EXPECT_NE(std::string(why).find("3-digit"), std::string::npos) << why;
+  EXPECT_NE(std::string(why).find("8-digit"), std::string::npos) << why;
+  // 8 digits are an extended id, kept as one; written back the same
+  ASSERT_TRUE(parse_candump_line("(1700000000.000000) vcan0 18FF0123#1122", c, why)) << why;
+  EXPECT_TRUE(c.frame.extended);
+  EXPECT_EQ(c.frame.id, 0x18FF0123u);
+  std::string back;
+  append_candump_line(back, 1700000000.0, "vcan0", c.frame);
+  EXPECT_EQ(back, "(1700000000.000000) vcan0 18FF0123#1122\n");
+  ASSERT_TRUE(parse_candump_line("(1700000000.000000) vcan0 00000123#11", c, why)) << why;
+  EXPECT_TRUE(c.frame.extended);
+  EXPECT_EQ(c.frame.id, 0x123u);
+  // an extended frame is never one of the contract's, whatever its id
+  Frame ext;
+  ext.id = kPsdCommand1;
+  ext.len = 8;
+  ext.extended = true;
+  EXPECT_EQ(check_frame(ext, kPsdCommandIds), Reject::kUnknownId);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1383,6 +1399,27 @@ TEST(Socketcand, SendAsPythonCanWritesIt) {
   ASSERT_EQ(parse_socketcand("< send 1 0 >", f), SocketcandMessage::kSend);
   EXPECT_EQ(f.id, 1u);
   EXPECT_EQ(f.len, 0);
+  EXPECT_FALSE(f.extended);
+}
+
+// Extended ids: 8 digits (socketcand's rule), or any id above 0x7FF (python-can 4.1 writes
+// "{id:X}" without leading zeros); the plant writes them back with 8 digits.
+TEST(Socketcand, ExtendedIds) {
+  Frame f;
+  ASSERT_EQ(parse_socketcand("< send 18FF50E5 2 1 2 >", f), SocketcandMessage::kSend);
+  EXPECT_TRUE(f.extended);
+  EXPECT_EQ(f.id, 0x18FF50E5u);
+  ASSERT_EQ(parse_socketcand("< send 800 1 0 >", f), SocketcandMessage::kSend);
+  EXPECT_TRUE(f.extended);
+  EXPECT_EQ(f.id, 0x800u);
+  ASSERT_EQ(parse_socketcand("< send 00000123 1 0 >", f), SocketcandMessage::kSend);
+  EXPECT_TRUE(f.extended);
+  EXPECT_EQ(f.id, 0x123u);
+  ASSERT_EQ(parse_socketcand("< send 123 1 0 >", f), SocketcandMessage::kSend);
+  EXPECT_FALSE(f.extended);
+  ASSERT_EQ(parse_socketcand("< frame 1ABCDEF0 1.0 11 >", f), SocketcandMessage::kFrame);
+  EXPECT_TRUE(f.extended);
+  EXPECT_EQ(f.id, 0x1ABCDEF0u);
 }
 
 TEST(Socketcand, FramesParse) {
@@ -1404,15 +1441,15 @@ TEST(Socketcand, FramesParse) {
 
 TEST(Socketcand, MalformedMessagesAndOtherKinds) {
   const char* malformed[] = {
-      "< send 800 1 00 >",                  // id above 0x7FF
-      "< send 1234 1 00 >",                 // 4-digit id
+      "< send 123456789 1 00 >",            // 9-digit id
+      "< send 20000000 1 00 >",             // above 0x1FFFFFFF
       "< send 123 9 0 0 0 0 0 0 0 0 0 >",   // 9 bytes
       "< send 123 3 01 02 >",               // fewer bytes than the length
       "< send 123 1 01 02 >",               // more bytes than the length
       "< send 123 1 zz >",                  // not hex
       "< send 123 1 100 >",                 // a byte of three digits
       "< send 123 1 01",                    // no '>'
-      "< frame 800 1.0 00 >",               // id above 0x7FF
+      "< frame 3FFFFFFF 1.0 00 >",          // id above 0x1FFFFFFF
       "< frame 123 1.0 112 >",              // odd number of digits
       "< frame 123 1.0 112233445566778899 >",  // 9 bytes
       "< frame 123 1.0 11ZZ >",             // not hex
