@@ -26,7 +26,7 @@ set(EHPT_DATA_INSTALL_DIR ${CMAKE_INSTALL_DATADIR}/ehpt)
 # scenarios name their vehicle and cycle relative to themselves (../vehicles, ../data): the
 # four folders keep their places side by side
 install(DIRECTORY scenarios vehicles data campaigns DESTINATION ${EHPT_DATA_INSTALL_DIR} COMPONENT runtime)
-install(FILES io/can/ehpt.dbc DESTINATION ${EHPT_DATA_INSTALL_DIR}/can COMPONENT runtime)
+install(FILES io/can/ehpt.dbc io/can/ehpt-psd.binding.toml io/can/ehpt-ev.binding.toml DESTINATION ${EHPT_DATA_INSTALL_DIR}/can COMPONENT runtime)
 install(FILES ${EHPT_LCM_SOURCES} DESTINATION ${EHPT_DATA_INSTALL_DIR}/lcm COMPONENT runtime)
 
 # The ECUs of one's own to start from, as documentation (not executable: one copies them):

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <span>
 #include <sstream>
 
@@ -30,19 +31,22 @@ namespace {
 const char* kPlantHelp =
     "usage: ehpt plant SCENARIO --bus SPEC [--lockstep] [--out DIR] [--set key=value ...]\n"
     "                  [--command-timeout-s T] [--lockstep-wait-s W] [--ecu-wait-s S]\n"
-    "                  [--allow-degraded] [--bus-log-format candump|asc] [--quiet]\n"
-    "                  [--realtime [--period T] [--cpu N] [--priority P]]\n"
+    "                  [--allow-degraded] [--bus-log-format candump|asc] [--bus-map FILE]\n"
+    "                  [--realtime [--period T] [--cpu N] [--priority P]] [--quiet]\n"
     "\n"
     "Runs the scenario's plant without its built-in ECU: an ECU on the bus reads the sensor\n"
     "frames and sends the command frames of io/can/ehpt.dbc (one sample per ECU period,\n"
-    "vehicle.ecu.period_s, default 0.01 s). Writes timeseries.csv and summary.json as\n"
-    "'ehpt run' does, plus bus.log (every frame in and out, candump -L format) and the bus\n"
-    "figures in summary.json (\"bus\").\n"
+    "vehicle.ecu.period_s, default 0.01 s), or those of its own DBC through a binding\n"
+    "(--bus-map). Writes timeseries.csv and summary.json as 'ehpt run' does, plus bus.log\n"
+    "(every frame in and out, candump -L format) and the bus figures in summary.json (\"bus\").\n"
     "  --bus SPEC       socketcan:IFACE (e.g. socketcan:vcan0), or socketcand:HOST:PORT (the\n"
     "                   plant listens there; python-can's socketcand interface and 'ehpt ecu'\n"
     "                   connect), or lcm:URL (lcm:udpm://239.255.76.67:7667?ttl=0; ttl > 0 warns:\n"
     "                   the messages leave this host)\n"
     "  --lcm-prefix P   LCM channels P + PLANT_STATUS and P + ECU_COMMAND (default EHPT_)\n"
+    "  --bus-map FILE   CAN: a binding (TOML, docs/binding.md) of the plant's inputs and outputs\n"
+    "                   to the signals of the ECU's own DBC; its messages go out at their DBC\n"
+    "                   cycle times (wall clock) and need no echo; default: ehpt's own contract\n"
     "  --lockstep       advance one ECU period only after the ECU's command for it has arrived\n"
     "                   (deterministic SIL); default: wall clock (real time, latest command)\n"
     "  --command-timeout-s T  a command older than T puts the plant in its safe state (torques\n"
@@ -89,7 +93,7 @@ bool parse_positive(const std::string& option, const std::string& text, double& 
 
 // The options 'ehpt plant' and 'ehpt ecu' share, and theirs.
 struct BusArgs {
-  std::string scenario, out_dir, bus, lcm_prefix = "EHPT_";
+  std::string scenario, out_dir, bus, lcm_prefix = "EHPT_", bus_map;
   std::vector<std::string> sets;
   bool lockstep = false, quiet = false, allow_degraded = false, asc_log = false;
   double command_timeout_s = 0.0, lockstep_wait_s = 1.0, ecu_wait_s = 60.0, idle_timeout_s = 10.0, max_samples = 0.0;
@@ -110,7 +114,7 @@ int parse_bus_args(const std::vector<std::string>& args, bool plant, const char*
       }
     }
     const std::string& o = args[i];
-    const bool takes_value = o == "--bus" || o == "--set" || o == "--lcm-prefix" || (plant && (o == "--out" || o == "--command-timeout-s" || o == "--bus-log-format" ||
+    const bool takes_value = o == "--bus" || o == "--set" || o == "--lcm-prefix" || (plant && (o == "--out" || o == "--command-timeout-s" || o == "--bus-log-format" || o == "--bus-map" ||
                                                                         o == "--lockstep-wait-s" || o == "--ecu-wait-s")) ||
                              (!plant && (o == "--idle-timeout-s" || o == "--max-samples"));
     if (takes_value && i + 1 >= args.size()) {
@@ -131,6 +135,12 @@ int parse_bus_args(const std::vector<std::string>& args, bool plant, const char*
       a.out_dir = args[++i];
       if (a.out_dir.empty()) {
         std::cerr << "--out needs a folder name (got an empty one)\n";
+        return 1;
+      }
+    } else if (plant && o == "--bus-map") {
+      a.bus_map = args[++i];
+      if (a.bus_map.empty()) {
+        std::cerr << "--bus-map needs a binding file (got an empty name)\n";
         return 1;
       }
     } else if (plant && o == "--lockstep") {
@@ -180,6 +190,11 @@ int parse_bus_args(const std::vector<std::string>& args, bool plant, const char*
     std::cerr << error << "\n";
     return 1;
   }
+  if (a.lcm && !a.bus_map.empty()) {
+    std::cerr << "--bus-map: a binding maps the plant onto a DBC's CAN frames; over LCM the messages are ehpt's "
+                 "LCM types (docs/lcm.md)\n";
+    return 1;
+  }
   if (a.lcm && a.asc_log) {
     std::cerr << "--bus-log-format asc: an ASC log is of CAN frames; over LCM record with lcm-logger (docs/lcm.md)\n";
     return 1;
@@ -205,11 +220,10 @@ int parse_bus_args(const std::vector<std::string>& args, bool plant, const char*
   return 0;
 }
 
-// The ids a side of the contract accepts, by vehicle family.
-std::span<const std::uint32_t> rx_ids(const ehpt::hil::Scenario& sc, bool plant) {
+// The ids the ECU's side of the contract accepts, by vehicle family (the plant's: its binding's).
+std::span<const std::uint32_t> ecu_rx_ids(const ehpt::hil::Scenario& sc) {
   namespace can = ehpt::io::can;
   const bool psd = sc.ecu.holds<ehpt::ecu::PsdEcuParams>();
-  if (plant) return psd ? std::span<const std::uint32_t>(can::kPsdCommandIds) : std::span<const std::uint32_t>(can::kEvCommandIds);
   return psd ? std::span<const std::uint32_t>(can::kPsdSensorIds) : std::span<const std::uint32_t>(can::kEvSensorIds);
 }
 
@@ -260,12 +274,31 @@ int cmd_plant(const std::vector<std::string>& args) {
     }
     driver = ehpt::hil::make_bus_plant(sc, *lcm_bus, bo, why);
   } else {
-    bus = ehpt::io::can::open_bus(a.spec, ehpt::io::can::BusRole::kPlant, rx_ids(sc, true), error);
+    // the binding before the bus: its problems are the user's file's, reported with their lines
+    const std::string family = ehpt::hil::bus_family(sc);
+    std::optional<ehpt::hil::Binding> binding;
+    if (a.bus_map.empty()) {
+      binding = ehpt::hil::default_binding(family, sc.ecu_timing.period_s);
+    } else {
+      std::vector<std::string> errors;
+      binding = ehpt::hil::load_binding(a.bus_map, family, sc.ecu_timing.period_s, errors);
+      for (const auto& e : errors) std::cerr << "error: " << e << "\n";
+      if (!binding) return 2;
+      if (!a.quiet) {
+        for (const auto& w : binding->warnings) std::cerr << "warning: " << w << "\n";
+      }
+    }
+    const std::vector<std::uint32_t> ids = binding->receive_ids();
+    bus = ehpt::io::can::open_bus(a.spec, ehpt::io::can::BusRole::kPlant, ids, error);
     if (!bus) {
       std::cerr << "error: " << error << "\n";
       return 2;
     }
-    driver = ehpt::hil::make_bus_plant(sc, *bus, bo, why);
+    driver = ehpt::hil::make_bus_plant(sc, *bus, bo, std::move(*binding), why);
+  }
+  if (!driver) {
+    std::cerr << "error: " << why << "\n";
+    return 2;
   }
   if (!a.quiet) {
     std::cerr << "plant " << sc.name << " on " << a.bus
@@ -328,7 +361,7 @@ int cmd_ecu(const std::vector<std::string>& args) {
     if (!a.quiet && !out(log.str())) return 1;
     return r.exit_code;
   }
-  const auto bus = ehpt::io::can::open_bus(a.spec, ehpt::io::can::BusRole::kEcu, rx_ids(sc, false), error);
+  const auto bus = ehpt::io::can::open_bus(a.spec, ehpt::io::can::BusRole::kEcu, ecu_rx_ids(sc), error);
   if (!bus) {
     std::cerr << "error: " << error << "\n";
     return 2;

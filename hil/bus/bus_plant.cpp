@@ -44,7 +44,8 @@ class BusPlant final : public ExternalDriver,
         h_s_(sc.solver.step_s),
         ratio_(sc.solver.ecu_ratio),
         period_s_(sc.ecu_timing.period_s),
-        timeout_s_(opt.command_timeout_s > 0.0 ? opt.command_timeout_s : 3.0 * sc.ecu_timing.period_s),
+        timeout_s_(opt.command_timeout_s > 0.0 ? opt.command_timeout_s
+                                               : std::max(3.0 * sc.ecu_timing.period_s, wire_.command_timeout_s())),
         timeout_steps_(static_cast<std::int64_t>(std::floor(timeout_s_ / sc.solver.step_s + 1e-9))),
         pacer_(clock_, std::max<std::int64_t>(1, static_cast<std::int64_t>(sc.solver.step_s * 1e9))) {
     wire_.set_background_writer(opt.realtime);
@@ -271,7 +272,7 @@ class BusPlant final : public ExternalDriver,
 
   // The sensors at t_n, with the plant's status.
   void send_sample(const Sensors& s, std::int64_t n) {
-    if (last_sample_ >= 0 && last_sample_ != n && !command_since_sample_) ++stale_samples_;
+    if (last_sample_ >= 0 && last_sample_ != n && wire_.sample_stale(n, command_since_sample_, ratio_)) ++stale_samples_;
     command_since_sample_ = false;
     last_sample_ = n;
     saturated_ += wire_.send_sample(s, n, safe_);
@@ -308,7 +309,7 @@ class BusPlant final : public ExternalDriver,
   // answer arrives after the plant, not waiting, has sent the next sample).
   bool drain(std::int64_t n, Command& command) {
     bool applied = false;
-    wire_.receive(std::max<std::int64_t>(last_sample_, 0), opt_.lockstep && !gave_up_waiting_ ? 0 : timeout_steps_,
+    wire_.receive(n, std::max<std::int64_t>(last_sample_, 0), opt_.lockstep && !gave_up_waiting_ ? 0 : timeout_steps_,
                   [&](const Command& c) {
                     apply_command(n, c, command);
                     applied = true;
@@ -361,7 +362,8 @@ class BusPlant final : public ExternalDriver,
       longest_gap_steps_ = std::max(longest_gap_steps_, n - last_command_step_);
       return false;
     }
-    if (n < timeout_step()) return false;
+    // the command as a whole, or (a cyclic ECU) one of its messages, is older than its timeout
+    if (n < timeout_step() && !wire_.message_timed_out(n)) return false;
     safe_ = true;
     safe_since_step_ = n;
     ++timeouts_;
@@ -416,15 +418,25 @@ bool can_run_on_bus(const Scenario& sc, std::string& why) {
   return true;
 }
 
+const char* bus_family(const Scenario& sc) { return sc.ecu.holds<ecu::PsdEcuParams>() ? "psd" : "ev"; }
+
 std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::can::Transport& bus, const BusPlantOptions& opt,
-                                               std::string& error) {
+                                               Binding binding, std::string& error) {
   if (!can_run_on_bus(sc, error)) return nullptr;
+  if (binding.family != bus_family(sc)) {
+    error = binding.file + ": a binding of the " + binding.family + " plant's fields, but " + sc.name + " is a " +
+            bus_family(sc) + " plant";
+    return nullptr;
+  }
+  const double command_timeout_s = opt.command_timeout_s > 0.0 ? opt.command_timeout_s : 3.0 * sc.ecu_timing.period_s;
   if (sc.ecu.holds<ecu::PsdEcuParams>()) {
     using S = msgs::PsdSensors;
-    return std::make_unique<BusPlant<S, CanWire<S>>>(sc, opt, bus, opt.log_interface, opt.asc_log);
+    return std::make_unique<BusPlant<S, CanWire<S>>>(sc, opt, bus, std::move(binding), sc.solver.step_s, opt.lockstep,
+                                                     command_timeout_s, opt.log_interface, opt.asc_log);
   }
   using S = msgs::EvSensors;
-  return std::make_unique<BusPlant<S, CanWire<S>>>(sc, opt, bus, opt.log_interface, opt.asc_log);
+  return std::make_unique<BusPlant<S, CanWire<S>>>(sc, opt, bus, std::move(binding), sc.solver.step_s, opt.lockstep,
+                                                   command_timeout_s, opt.log_interface, opt.asc_log);
 }
 
 std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::lcm::LcmBus& bus, const BusPlantOptions& opt,

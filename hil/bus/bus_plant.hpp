@@ -24,6 +24,7 @@
 
 #include "hil/run/batch.hpp"
 #include "hil/config/config.hpp"
+#include "hil/bus/bus_binding.hpp"
 #include "io/can/transport.hpp"
 #include "io/lcm/lcm_bus.hpp"
 
@@ -48,9 +49,12 @@ struct BusPlantOptions {
 // False and a one-line reason if the scenario cannot run on the bus (a rig without bus
 // messages, an ECU latency the bus cannot honour).
 bool can_run_on_bus(const Scenario& sc, std::string& why);
-// The driver of `ehpt plant` (nullptr and why if !can_run_on_bus).
+// "psd" or "ev": whose messages the scenario's plant speaks (a binding's family).
+const char* bus_family(const Scenario& sc);
+// The driver of `ehpt plant` over CAN, its frames those of the binding (default_binding for
+// ehpt's own contract); nullptr and why if !can_run_on_bus or the binding is another family's.
 std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::can::Transport& bus,
-                                               const BusPlantOptions& opt, std::string& error);
+                                               const BusPlantOptions& opt, Binding binding, std::string& error);
 // The same over LCM (io/lcm/): one message per sample and per command, doubles.
 std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::lcm::LcmBus& bus,
                                                const BusPlantOptions& opt, std::string& error);

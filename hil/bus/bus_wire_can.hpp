@@ -1,9 +1,23 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
-// The CAN side of the bus plant (hil/bus/bus_plant.cpp): a sample goes out as the frames of
-// io/can/ehpt.dbc, a command comes in as its frames, checked by the codec's rules; every frame
-// in and out goes to bus.log (candump -L) and, if asked, to bus.asc (Vector ASC, with each
-// frame's direction). Run phase: no allocation (fixed buffers).
+// The CAN side of the bus plant (hil/bus/bus_plant.cpp), driven by a binding (hil/bus/bus_binding.hpp):
+// a sample goes out as the binding's [[send]] messages, a command comes in as its [[receive]]
+// messages; ehpt's own contract (io/can/ehpt.dbc) is the default binding. Every frame in and
+// out goes to bus.log (candump -L) and, if asked, to bus.asc (Vector ASC, with each frame's
+// direction). Run phase: no allocation (the binding's tables are fixed at load).
+//
+// The rules, the codec's (io/can/codec.hpp) for every binding:
+//   encode: physical value -> clamp to the signal's [min, max] (counted as saturated) ->
+//           raw = round((value - offset) / factor), half away from zero -> bits;
+//   receive, in this order: unknown id (not a bound message, or the other frame format),
+//           wrong length, E2E (bad_crc: CRC or data id; bad_counter: its alive counter), a
+//           bound signal outside its [min, max] (out_of_range), an echo older than allowed
+//           (stale), a rolling counter that repeated or jumped (bad_counter). A rejected frame
+//           changes nothing.
+//   a command is complete when every received field has come since the last sample (lockstep,
+//   or a binding with an echo: per sample), or since the last resync (wall clock without an
+//   echo: the latest value of each signal, as a cyclic ECU sends them); a message older than
+//   its timeout puts the plant in its safe state (message_timed_out).
 
 #include <array>
 #include <cstdint>
@@ -12,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "hil/bus/bus_binding.hpp"
 #include "hil/bus/bus_family.hpp"
 #include "io/can/asc_log.hpp"
 #include "io/can/candump_log.hpp"
@@ -20,6 +35,7 @@
 #include "io/handoff_buffer.hpp"
 #include "io/output_dir.hpp"
 #include "io/text_file.hpp"
+#include "msgs/fields.hpp"
 
 namespace ehpt::hil {
 
@@ -30,15 +46,34 @@ class CanWire {
  public:
   using Command = typename F::Command;
 
-  CanWire(io::can::Transport& bus, std::string log_interface, bool asc = false)
+  // step_s: the plant's step; lockstep: commands per sample; command_timeout_s: the plant's
+  // (for received messages whose binding gives none and that have no cycle time)
+  CanWire(io::can::Transport& bus, Binding binding, double step_s, bool lockstep, double command_timeout_s,
+          std::string log_interface, bool asc = false)
       : bus_(bus),
+        binding_(std::move(binding)),
+        step_s_(step_s),
+        per_sample_(lockstep || binding_.echo),
         log_interface_(std::move(log_interface)),
-        filter_(F::kCanCommandIds),
         log_buf_(kLogFlushBytes),
         asc_(asc),
         asc_buf_(asc ? kLogFlushBytes : 1) {
     line_.reserve(96 + log_interface_.size());  // one candump (or ASC) line: never more
+    tx_.resize(binding_.send.size());
+    rx_.resize(binding_.receive.size());
+    for (std::size_t j = 0; j < rx_.size(); ++j) {
+      const double t = binding_.receive[j].timeout_s > 0.0 ? binding_.receive[j].timeout_s : command_timeout_s;
+      rx_[j].timeout_steps = static_cast<std::int64_t>(std::floor(t / step_s + 1e-9));
+      if (!per_sample_) timeout_s_ = std::max(timeout_s_, t);  // per sample: the plant's timeout alone
+    }
+    for (const auto& [field, value] : binding_.unbound) Fields<Command>()[static_cast<std::size_t>(field)].set(incoming_, value);
   }
+
+  // Cyclic: the command timeout the plant applies to the command as a whole, the longest
+  // message timeout (each message also has its own, message_timed_out); per sample: 0 (the
+  // plant's own).
+  double command_timeout_s() const { return timeout_s_; }
+  const Binding& binding() const { return binding_; }
 
   // The real-time loop: bus.log is written by its writer thread (background_flush), never by
   // the loop; otherwise by the loop itself once 1 MB has gathered, and between chunks.
@@ -75,43 +110,109 @@ class CanWire {
     }
   }
 
-  // The sensors, then PlantStatus (the end of the sample); returns signals saturated.
+  // The [[send]] messages due at this sample, in the binding's order (ehpt's contract: the
+  // sensors, then PlantStatus, the end of the sample); returns signals saturated.
   int send_sample(const Sensors& s, std::int64_t step, bool ecu_timeout) {
-    const io::can::PlantStatus status{static_cast<std::uint32_t>(step), s.fault, s.locked, ecu_timeout};
-    std::array<io::can::Frame, F::kCanSensorIds.size()> frames;
-    const int saturated = io::can::encode(s, status, tx_, frames);
-    for (const auto& f : frames) bus_.send(f);
-    log_frames(frames, false);
-    received_mask_ = 0;  // a command for this sample: all its frames after these
+    int saturated = 0;
+    for (std::size_t i = 0; i < binding_.send.size(); ++i) {
+      const BoundMessage& m = binding_.send[i];
+      TxState& tx = tx_[i];
+      if (!per_sample_ && m.cycle_ms > 0 && tx.last_step >= 0 &&
+          static_cast<double>(step - tx.last_step) * step_s_ < m.cycle_ms * 1e-3 - 0.5 * step_s_) {
+        continue;  // not due: a cyclic message goes out at its own cycle on the plant's clock
+      }
+      tx.last_step = step;
+      io::can::Frame f;
+      f.id = m.message->id;
+      f.extended = m.message->extended;
+      f.len = static_cast<std::uint8_t>(m.message->size_bytes);
+      const std::span<std::uint8_t> data(f.data.data(), f.len);
+      for (const io::can::DbcSignal& sig : m.message->signals) {  // unbound signals: their start values
+        if (sig.start_value_raw && sig.value_type == io::can::SignalValueType::kInteger) {
+          io::can::insert_raw(sig, static_cast<std::uint64_t>(static_cast<std::int64_t>(*sig.start_value_raw)), data);
+        }
+      }
+      for (const BoundSignal& b : m.signals) {
+        const std::uint64_t mask = raw_mask(b.signal->length);
+        switch (b.role) {
+          case BoundRole::kField: {
+            const double v = Fields<Sensors>()[static_cast<std::size_t>(b.field)].get(s);
+            io::can::insert_raw(*b.signal, encode_value(b, b.to_si == 1.0 ? v : v / b.to_si, saturated), data);
+            break;
+          }
+          case BoundRole::kPlantStep:
+            io::can::insert_raw(*b.signal, static_cast<std::uint64_t>(step) & mask, data);
+            break;
+          case BoundRole::kEcuTimeout:
+            io::can::insert_raw(*b.signal, ecu_timeout ? 1u : 0u, data);
+            break;
+          case BoundRole::kCounter:
+            io::can::insert_raw(*b.signal, tx.counter & mask, data);
+            ++tx.counter;
+            break;
+          case BoundRole::kEcho:
+            break;
+        }
+      }
+      if (m.e2e) {
+        io::can::e2e_protect(*m.e2e, data, static_cast<std::uint8_t>(tx.e2e_counter));
+        tx.e2e_counter = (tx.e2e_counter + 1) % static_cast<unsigned>(io::can::e2e_counter_modulo(*m.e2e));
+      }
+      bus_.send(f);
+      log_frames(std::span<const io::can::Frame>(&f, 1), false);
+    }
+    if (per_sample_) received_mask_ = 0;  // a command for this sample: all its frames after these
     return saturated;
   }
 
-  // Everything received: logged, checked (freshness against the newest sample), applied;
-  // on_command(command) for each complete one.
+  // Everything received: logged, checked (an echo against the newest sample), applied;
+  // on_command(command) for each complete one. now_step: the plant's step (message ages).
   template <class OnCommand>
-  void receive(std::int64_t sample_step, std::int64_t max_age_steps, OnCommand&& on_command) {
-    const io::can::Freshness fresh{static_cast<std::uint32_t>(sample_step),
-                                   static_cast<std::uint32_t>(std::min<std::int64_t>(max_age_steps, 0xFFFF))};
+  void receive(std::int64_t now_step, std::int64_t sample_step, std::int64_t max_age_steps, OnCommand&& on_command) {
     io::can::Frame buf[64];
     while (const std::size_t k = bus_.receive(buf)) {
       log_frames(std::span<const io::can::Frame>(buf, k), true);
       for (std::size_t i = 0; i < k; ++i) {
-        if (filter_.accept(buf[i], &fresh) != io::can::Reject::kNone) continue;
-        io::can::apply(buf[i], incoming_);
-        for (std::size_t j = 0; j < F::kCanCommandIds.size(); ++j) {
-          if (F::kCanCommandIds[j] == buf[i].id) received_mask_ |= 1u << j;
-        }
-        if (received_mask_ == (1u << F::kCanCommandIds.size()) - 1) {
-          received_mask_ = 0;
-          on_command(incoming_);
-        }
+        if (!accept(buf[i], now_step, sample_step, max_age_steps)) continue;
+        if ((received_mask_ & binding_.complete_mask) != binding_.complete_mask) continue;
+        if (per_sample_) received_mask_ = 0;
+        on_command(incoming_);
       }
     }
   }
 
+  // Wall clock without an echo: whether a received message is older than its timeout at step
+  // n (the plant then goes to its safe state and calls resync). Counted per message.
+  bool message_timed_out(std::int64_t n) {
+    if (per_sample_) return false;  // the command as a whole (the plant's timeout)
+    bool out = false;
+    for (RxState& r : rx_) {
+      if (r.last_step >= 0 && n - r.last_step > r.timeout_steps) {
+        ++r.timeouts;
+        r.last_step = -1;  // counted once; it must come again
+        out = true;
+      }
+    }
+    return out;
+  }
+  // Whether the ECU left this sample without a fresh command: per sample, no command since the
+  // last one; cyclic, a received message older than 1.5 of its cycles (of ECU periods: period_steps).
+  bool sample_stale(std::int64_t n, bool command_since_sample, std::int64_t period_steps) const {
+    if (per_sample_) return !command_since_sample;
+    for (std::size_t j = 0; j < rx_.size(); ++j) {
+      const int cycle_ms = binding_.receive[j].cycle_ms;
+      const double cycle_steps = cycle_ms > 0 ? cycle_ms * 1e-3 / step_s_ : static_cast<double>(period_steps);
+      if (rx_[j].last_step < 0 || static_cast<double>(n - rx_[j].last_step) > 1.5 * cycle_steps) return true;
+    }
+    return false;
+  }
+
   // The stream went stale (safe state): a restarted ECU starts its counters anew.
   void resync() {
-    filter_.resync();
+    for (RxState& r : rx_) {
+      r.last_counter = -1;
+      r.e2e.reset();
+    }
     received_mask_ = 0;
   }
 
@@ -138,20 +239,40 @@ class CanWire {
   // The wire's figures into summary.json's "bus"; rejected: their total.
   void report(io::JsonObject& b, std::int64_t& rejected) const {
     const io::can::TransportCounters& tc = bus_.counters();
-    const io::can::RxStats& rx = filter_.stats();
+    RxCounts total;
+    total.unknown_id = unknown_id_;
+    io::JsonObject messages;
+    for (std::size_t j = 0; j < rx_.size(); ++j) {
+      const RxCounts& c = rx_[j].counts;
+      total.add(c);
+      io::JsonObject m;
+      m.integer("accepted", c.accepted);
+      m.integer("wrong_length", c.wrong_length);
+      m.integer("bad_crc", c.bad_crc);
+      m.integer("bad_counter", c.bad_counter);
+      m.integer("out_of_range", c.out_of_range);
+      m.integer("stale", c.stale);
+      m.integer("lost", c.lost);
+      m.integer("timed_out", rx_[j].timeouts);
+      messages.object(binding_.receive[j].message->name, m);
+    }
+    b.text("binding", binding_.file);
+    b.text("dbc", binding_.dbc.file);
     b.integer("frames_in", tc.frames_in);
     b.integer("frames_out", tc.frames_out);
-    b.integer("frames_accepted", rx.accepted);
+    b.integer("frames_accepted", total.accepted);
     io::JsonObject rej;
-    rej.integer("unknown_id", rx.unknown_id);
-    rej.integer("wrong_length", rx.wrong_length);
-    rej.integer("bad_counter", rx.bad_counter);
-    rej.integer("out_of_range", rx.out_of_range);
-    rej.integer("stale", rx.stale);
+    rej.integer("unknown_id", total.unknown_id);
+    rej.integer("wrong_length", total.wrong_length);
+    rej.integer("bad_crc", total.bad_crc);
+    rej.integer("bad_counter", total.bad_counter);
+    rej.integer("out_of_range", total.out_of_range);
+    rej.integer("stale", total.stale);
     rej.integer("malformed", tc.rx_malformed);
     rej.integer("before_start", before_start_);
     b.object("rejected", rej);
-    b.integer("frames_lost", rx.lost);
+    b.object("messages_received", messages);
+    b.integer("frames_lost", total.lost);
     b.integer("send_dropped", tc.send_dropped);
     b.integer("slow_client_drops", tc.slow_drops);
     b.integer("error_frames", tc.error_frames);
@@ -159,7 +280,8 @@ class CanWire {
     b.integer("peers_lost", tc.peers_lost);
     b.integer("peers_refused", tc.peers_refused);
     b.integer("peers_evicted", tc.peers_evicted);
-    rejected = rx.unknown_id + rx.wrong_length + rx.bad_counter + rx.out_of_range + rx.stale + tc.rx_malformed + before_start_;
+    rejected = total.unknown_id + total.wrong_length + total.bad_crc + total.bad_counter + total.out_of_range +
+               total.stale + tc.rx_malformed + before_start_;
   }
   // Why the bus itself degraded the session (ExternalDriver::degraded_reasons).
   void degraded_reasons(std::vector<std::string>& why) const {
@@ -180,6 +302,135 @@ class CanWire {
  private:
   // bus.log is written when this much is buffered (and between chunks)
   static constexpr std::size_t kLogFlushBytes = 1 << 20;
+
+  template <class M>
+  static constexpr const auto& Fields() {
+    return msgs::FieldTable<M>::kFields;
+  }
+  static std::uint64_t raw_mask(int length) { return length >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << length) - 1; }
+  // The raw value as a signed number (integer signals).
+  static std::int64_t signed_raw(const io::can::DbcSignal& s, std::uint64_t raw) {
+    if (s.is_signed && s.length < 64 && ((raw >> (s.length - 1)) & 1u)) return static_cast<std::int64_t>(raw | ~raw_mask(s.length));
+    return static_cast<std::int64_t>(raw);
+  }
+  // physical -> raw bits by the codec's rule (io/can/codec.cpp to_raw), so that ehpt's contract
+  // as a binding sends the frames the codec does, bit for bit.
+  static std::uint64_t encode_value(const BoundSignal& b, double v, int& saturated) {
+    const io::can::DbcSignal& s = *b.signal;
+    if (s.value_type != io::can::SignalValueType::kInteger) {
+      if (!std::isfinite(v) || (s.has_range() && (v < s.min || v > s.max))) ++saturated;
+      return io::can::physical_to_raw(s, v);
+    }
+    std::int64_t r = 0;
+    if (std::isnan(v)) {
+      ++saturated;
+      r = std::clamp<std::int64_t>(0, b.raw_lo, b.raw_hi);
+    } else {
+      if (s.has_range() && v < s.min) {
+        v = s.min;
+        ++saturated;
+      } else if (s.has_range() && v > s.max) {
+        v = s.max;
+        ++saturated;
+      }
+      const double scaled = (v - s.offset) / s.factor;
+      if (!(scaled >= static_cast<double>(b.raw_lo) - 0.5)) {
+        r = b.raw_lo;
+        if (!s.has_range()) ++saturated;
+      } else if (!(scaled <= static_cast<double>(b.raw_hi) + 0.5)) {
+        r = b.raw_hi;
+        if (!s.has_range()) ++saturated;
+      } else {
+        r = std::clamp(static_cast<std::int64_t>(std::llround(scaled)), b.raw_lo, b.raw_hi);
+      }
+    }
+    return static_cast<std::uint64_t>(r) & raw_mask(s.length);
+  }
+
+  // One received frame through the rules (the header's order); true if accepted (its fields
+  // are then in incoming_ and their bits in received_mask_).
+  bool accept(const io::can::Frame& f, std::int64_t now_step, std::int64_t sample_step, std::int64_t max_age_steps) {
+    std::size_t j = 0;
+    while (j < binding_.receive.size() &&
+           (binding_.receive[j].message->id != f.id || binding_.receive[j].message->extended != f.extended)) {
+      ++j;
+    }
+    if (j == binding_.receive.size()) {
+      ++unknown_id_;
+      return false;
+    }
+    const BoundMessage& m = binding_.receive[j];
+    RxState& r = rx_[j];
+    if (f.len != m.message->size_bytes) {
+      ++r.counts.wrong_length;
+      return false;
+    }
+    const std::span<const std::uint8_t> data(f.data.data(), f.len);
+    if (m.e2e) {
+      const io::can::E2eResult e = io::can::e2e_check(*m.e2e, data, r.e2e);
+      if (e == io::can::E2eResult::kBadCrc || e == io::can::E2eResult::kBadDataId) {
+        ++r.counts.bad_crc;
+        return false;
+      }
+      if (e != io::can::E2eResult::kOk) {
+        ++r.counts.bad_counter;
+        return false;
+      }
+    }
+    for (const BoundSignal& b : m.signals) {  // every bound signal in range first (the codec's order)
+      if (!io::can::is_present(*m.message, *b.signal, data)) continue;
+      if (b.signal->value_type != io::can::SignalValueType::kInteger) {
+        const double v = io::can::decode(*b.signal, data);
+        if (!std::isfinite(v) || (b.signal->has_range() && (v < b.signal->min || v > b.signal->max))) {
+          ++r.counts.out_of_range;
+          return false;
+        }
+        continue;
+      }
+      const std::int64_t sr = signed_raw(*b.signal, io::can::extract_raw(*b.signal, data));
+      if (sr < b.raw_lo || sr > b.raw_hi) {
+        ++r.counts.out_of_range;
+        return false;
+      }
+    }
+    int counter = -1;
+    for (const BoundSignal& b : m.signals) {
+      if (b.role == BoundRole::kEcho) {
+        const std::uint64_t raw = io::can::extract_raw(*b.signal, data);
+        const std::uint64_t mask = raw_mask(b.signal->length);
+        const std::uint64_t age = (static_cast<std::uint64_t>(sample_step) - raw) & mask;
+        if (age > static_cast<std::uint64_t>(std::min<std::int64_t>(max_age_steps, static_cast<std::int64_t>(mask)))) {
+          ++r.counts.stale;
+          return false;
+        }
+      }
+      if (b.role == BoundRole::kCounter) counter = static_cast<int>(io::can::extract_raw(*b.signal, data));
+    }
+    if (counter >= 0) {  // the codec's counter rule (io/can/codec.hpp counter_step), mod 2^length
+      int modulo_mask = 0;
+      for (const BoundSignal& b : m.signals) {
+        if (b.role == BoundRole::kCounter) modulo_mask = static_cast<int>(raw_mask(b.signal->length));
+      }
+      if (r.last_counter >= 0) {
+        const int delta = (counter - r.last_counter) & modulo_mask;
+        if (delta < 1 || delta > io::can::kMaxCounterJump) {
+          ++r.counts.bad_counter;
+          return false;
+        }
+        r.counts.lost += delta - 1;
+      }
+      r.last_counter = counter;
+    }
+    ++r.counts.accepted;
+    r.last_step = now_step;
+    for (const BoundSignal& b : m.signals) {
+      if (b.role != BoundRole::kField || !io::can::is_present(*m.message, *b.signal, data)) continue;
+      const double v = io::can::decode(*b.signal, data);
+      Fields<Command>()[static_cast<std::size_t>(b.field)].set(incoming_, b.to_si == 1.0 ? v : v * b.to_si);
+      received_mask_ |= b.mask_bit;
+    }
+    return true;
+  }
 
   static double wall_time_s() {
     timespec ts{};
@@ -211,12 +462,44 @@ class CanWire {
     if (log_error_.empty() && !text.empty()) asc_log_.write(text, log_error_);
   }
 
+  struct TxState {
+    std::int64_t last_step = -1;  // the step it last went out
+    std::uint64_t counter = 0;    // its rolling counter's next value
+    unsigned e2e_counter = 0;     // its E2E alive counter's next value
+  };
+  struct RxCounts {
+    std::int64_t accepted = 0, unknown_id = 0, wrong_length = 0, bad_crc = 0, bad_counter = 0, out_of_range = 0,
+                 stale = 0, lost = 0;
+    void add(const RxCounts& o) {
+      accepted += o.accepted;
+      wrong_length += o.wrong_length;
+      bad_crc += o.bad_crc;
+      bad_counter += o.bad_counter;
+      out_of_range += o.out_of_range;
+      stale += o.stale;
+      lost += o.lost;
+    }
+  };
+  struct RxState {
+    int last_counter = -1;  // the rolling counter of the last accepted frame; -1: none (start, resync)
+    io::can::E2eReceiver e2e;
+    std::int64_t last_step = -1;  // the plant step it was last accepted at
+    std::int64_t timeout_steps = 0;
+    std::int64_t timeouts = 0;
+    RxCounts counts;
+  };
+
   io::can::Transport& bus_;
+  Binding binding_;
+  double step_s_;
+  bool per_sample_;        // a command is complete per sample (lockstep, or an echo)
+  double timeout_s_ = 0.0;  // the longest received message's timeout
+  std::vector<TxState> tx_;
+  std::vector<RxState> rx_;
+  std::int64_t unknown_id_ = 0;
   std::string log_interface_;
-  io::can::FrameFilter filter_;
-  io::can::TxCounters tx_;
   Command incoming_{};
-  unsigned received_mask_ = 0;
+  std::uint64_t received_mask_ = 0;
   std::int64_t before_start_ = 0;  // frames that came before t = 0 (idle)
   io::TextFileWriter log_;
   io::HandoffBuffer log_buf_;

@@ -64,7 +64,7 @@ class LcmWire {
   }
 
   template <class OnCommand>
-  void receive(std::int64_t sample_step, std::int64_t max_age_steps, OnCommand&& on_command) {
+  void receive(std::int64_t /*now_step*/, std::int64_t sample_step, std::int64_t max_age_steps, OnCommand&& on_command) {
     sample_step_ = sample_step;
     max_age_steps_ = max_age_steps;
     bus_.handle_now();  // on_message runs for each message that has arrived
@@ -72,7 +72,11 @@ class LcmWire {
     pending_count_ = 0;
   }
 
-  void resync() { last_step_ = -1; }  // a restarted ECU's first command is taken as it is
+  void resync() { last_step_ = -1; }
+  // one message is the whole command: the plant's own timeout and staleness rule
+  bool message_timed_out(std::int64_t) { return false; }
+  bool sample_stale(std::int64_t, bool command_since_sample, std::int64_t) const { return !command_since_sample; }
+  double command_timeout_s() const { return 0.0; }  // a restarted ECU's first command is taken as it is
   bool flush(std::string&) { return true; }
   void finish() {}
   void set_background_writer(bool) {}  // no log of its own (lcm-logger records LCM)

@@ -16,8 +16,15 @@ checks it). Start from here to test an ECU of your own in process:
 import ast
 import math
 import sys
+from types import SimpleNamespace
 
-import ehpt
+# the ehpt module is needed to run in process (run_with_python_ecu, main); the ECU itself
+# (PsdEcu.decide) is plain Python, so that an ECU on a bus can use it without the module
+# (examples/own_dbc/vcu_ecu.py)
+try:
+    import ehpt
+except ImportError:  # pragma: no cover - only the bus examples import this file without it
+    ehpt = None
 
 
 class PowToW:
@@ -100,8 +107,20 @@ class PsdEcu:
         self.sequence = 0
 
     def update(self, s):
-        """PsdSensors -> PsdCommand (ecu/psd_ecu.cpp PsdEcu::update, line by line)."""
+        """PsdSensors -> PsdCommand, stamped with the sample it answers (as the runner stamps
+        the built-in ECU's command)."""
+        d = self.decide(s)
         out = ehpt.PsdCommand()
+        out.motTauRef_Nm, out.iceON, out.icePowRef_W = d.motTauRef_Nm, d.iceON, d.icePowRef_W
+        out.iceTauRef_Nm, out.genTauRef_Nm = d.iceTauRef_Nm, d.genTauRef_Nm
+        out.stamp = ehpt.Stamp(time_s=s.stamp.time_s, step=s.stamp.step, sequence=self.sequence)
+        self.sequence = (self.sequence + 1) & 0xFFFFFFFF
+        return out
+
+    def decide(self, s):
+        """The sensors (driverRequest, batSOC, motPowDelB_W, iceW_rad_s as attributes) -> the
+        command's five fields (ecu/psd_ecu.cpp PsdEcu::update, line by line)."""
+        out = SimpleNamespace()
         out.motTauRef_Nm = self.max_torque_request_Nm * s.driverRequest
         p_add_W = self.p_avg_W + self.soc_loop_gain_W * (self.soc_ref - s.batSOC)
         if self.kind == "MBecu2":
@@ -125,9 +144,6 @@ class PsdEcu:
         out.genTauRef_Nm = hi if hi < v else v
         self.p_avg_W += self.a_power * (s.motPowDelB_W - self.p_avg_W)
         self.tau_gf_Nm += self.a_gen * (self.gen_loop_gain * (speed_ref_rad_s - s.iceW_rad_s) - self.tau_gf_Nm)
-        # stamped with the sample it answers, as the runner stamps the built-in ECU's command
-        out.stamp = ehpt.Stamp(time_s=s.stamp.time_s, step=s.stamp.step, sequence=self.sequence)
-        self.sequence = (self.sequence + 1) & 0xFFFFFFFF
         return out
 
 
