@@ -38,6 +38,9 @@ install(FILES tools/pycan_ecu.py tools/ehpt_dbc.py python/examples/mbecu2_ecu.py
 install(FILES packaging/examples-README.md DESTINATION ${EHPT_EXAMPLES_INSTALL_DIR} RENAME README.md COMPONENT runtime)
 install(FILES examples/embed/CMakeLists.txt examples/embed/main.cpp
         DESTINATION ${EHPT_EXAMPLES_INSTALL_DIR}/embed COMPONENT runtime)
+# a VCU with its own DBC and its binding; its strategy is mbecu2_ecu.py, one folder up
+install(FILES examples/own_dbc/vcu.dbc examples/own_dbc/vcu.binding.toml examples/own_dbc/vcu_ecu.py
+        DESTINATION ${EHPT_EXAMPLES_INSTALL_DIR}/own_dbc COMPONENT runtime)
 
 foreach(dir msgs plant solvers io hil ecu)
   install(DIRECTORY ${dir}/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/ehpt/${dir} COMPONENT dev
@@ -153,7 +156,7 @@ set(CPACK_DEBIAN_RUNTIME_PACKAGE_NAME ehpt)
 set(CPACK_DEBIAN_RUNTIME_PACKAGE_DEPENDS "python3, python3-matplotlib, python3-numpy")
 # what the documented uses need besides: cyclictest (real-time latency), candump and cansend,
 # python-can (the example CAN ECU), lcm-logger and lcm-spy (LCM)
-set(CPACK_DEBIAN_RUNTIME_PACKAGE_SUGGESTS "rt-tests, can-utils, python3-can, liblcm-bin")
+set(CPACK_DEBIAN_RUNTIME_PACKAGE_SUGGESTS "rt-tests, can-utils, python3-can, python3-canmatrix, liblcm-bin")
 set(CPACK_DEBIAN_RUNTIME_DESCRIPTION "plant models of electric and hybrid power trains for SIL/HIL
 ehpt simulates the power train of an electric or hybrid vehicle on a drive
 cycle: battery, electric machines, power-split device, engine, body and

@@ -39,8 +39,8 @@ import canmatrix  # noqa: E402
 import canmatrix.formats  # noqa: E402
 
 HERE = pathlib.Path(__file__).resolve().parent
-# the strategy: the source tree's python/examples, else next to this file (the installed docs)
-for folder in (HERE.parents[1] / "python" / "examples", HERE):
+# the strategy: the source tree's python/examples, else one folder up (the installed examples)
+for folder in (HERE.parents[1] / "python" / "examples", HERE.parent):
     if (folder / "mbecu2_ecu.py").is_file():
         sys.path.insert(0, str(folder))
         break

@@ -303,7 +303,9 @@ done
 examples="$tmp/root/usr/share/doc/ehpt/examples"
 for pair in pycan_ecu.py:tools/pycan_ecu.py ehpt_dbc.py:tools/ehpt_dbc.py mbecu2_ecu.py:python/examples/mbecu2_ecu.py \
             lcm_ecu.cpp:examples/lcm_ecu.cpp embed/CMakeLists.txt:examples/embed/CMakeLists.txt \
-            embed/main.cpp:examples/embed/main.cpp README.md:packaging/examples-README.md; do
+            embed/main.cpp:examples/embed/main.cpp README.md:packaging/examples-README.md \
+            own_dbc/vcu.dbc:examples/own_dbc/vcu.dbc own_dbc/vcu.binding.toml:examples/own_dbc/vcu.binding.toml \
+            own_dbc/vcu_ecu.py:examples/own_dbc/vcu_ecu.py; do
   cmp "$examples/${pair%%:*}" "$src/${pair#*:}" || fail "the packaged example ${pair%%:*} is not ${pair#*:}"
 done
 # the unpacked CAN ECU finds the package's DBC by itself (the source tree hidden), on a virtual bus
