@@ -35,6 +35,9 @@ from types import SimpleNamespace
 import can
 
 logging.getLogger("canmatrix").setLevel(logging.ERROR)  # it warns at import about formats it lacks
+# python-can 4.1's socketcand client logs a warning per connection attempt (thousands in its 10 s
+# retry loop); a failure to connect is reported once, by main()
+logging.getLogger("can.interfaces.socketcand").setLevel(logging.ERROR)
 import canmatrix  # noqa: E402
 import canmatrix.formats  # noqa: E402
 
@@ -154,11 +157,25 @@ def main(argv=None):
     ap.add_argument("--channel", default="vcan0")
     ap.add_argument("--calibration", help="MBecu2's parameters as JSON (ehpt.Simulation(...).ecu_parameters)")
     ap.add_argument("--scenario", default="psecu2_nedc", help="without --calibration: read it from this scenario")
-    ap.add_argument("--cyclic", action="store_true", help="send every 10 ms on our own clock (default: answer each sample)")
+    mode = ap.add_mutually_exclusive_group()
+    mode.add_argument("--answer", action="store_true", help="answer each sample (the default): lockstep works")
+    mode.add_argument("--cyclic", action="store_true", help="send every 10 ms on our own clock (wall clock)")
     ap.add_argument("--idle-timeout-s", type=float, default=5.0, help="stop after this long without a frame")
     args = ap.parse_args(argv)
-    vcu = Vcu(load_calibration(args))
-    bus = open_bus(args)
+    try:
+        vcu = Vcu(load_calibration(args))
+    except (OSError, ValueError) as e:
+        print(f"vcu: cannot read the calibration: {e}", file=sys.stderr)
+        return 1
+    except KeyError as e:
+        print(f"vcu: the calibration has no {e} (write it from ehpt.Simulation(...).ecu_parameters)", file=sys.stderr)
+        return 1
+    try:
+        bus = open_bus(args)
+    except (OSError, TimeoutError, can.CanError) as e:
+        where = f"{args.host}:{args.port}" if args.interface == "socketcand" else args.channel
+        print(f"vcu: cannot open the bus ({args.interface} {where}): {e}", file=sys.stderr)
+        return 1
     sent = 0
     last_heard = time.monotonic()
     next_send = time.monotonic()
