@@ -114,21 +114,6 @@ struct Reader {
   }
 };
 
-// The raw range the codec's rule allows an integer signal: [min, max] of the DBC (as raw,
-// rounded as io/can/codec.cpp does), else what its bits hold.
-void raw_range(const DbcSignal& s, std::int64_t& lo, std::int64_t& hi) {
-  const int bits = std::min(s.length, 63);
-  lo = s.is_signed ? -(std::int64_t{1} << (bits - 1)) : 0;
-  hi = s.is_signed ? (std::int64_t{1} << (bits - 1)) - 1 : (s.length >= 63 ? INT64_MAX : (std::int64_t{1} << bits) - 1);
-  if (!s.has_range() || s.value_type != io::can::SignalValueType::kInteger) return;
-  double a = (s.min - s.offset) / s.factor, b = (s.max - s.offset) / s.factor;
-  if (a > b) std::swap(a, b);  // a negative factor
-  if (std::fabs(a) < 9e18 && std::fabs(b) < 9e18) {
-    lo = std::max(lo, static_cast<std::int64_t>(std::llround(a)));
-    hi = std::min(hi, static_cast<std::int64_t>(std::llround(b)));
-  }
-}
-
 struct LoadState {
   Reader& r;
   const Family& fam;
@@ -200,7 +185,7 @@ bool role_signal(LoadState& st, const DbcMessage& m, const toml::table& t, const
   BoundSignal bs;
   bs.signal = s;
   bs.role = role;
-  raw_range(*s, bs.raw_lo, bs.raw_hi);
+  bs.raw = io::can::codec_raw_range(*s);
   bm.signals.push_back(bs);
   return true;
 }
@@ -420,7 +405,7 @@ void read_message(LoadState& st, const toml::table& t, bool send) {
     }
     BoundSignal b;
     b.signal = s;
-    raw_range(*s, b.raw_lo, b.raw_hi);
+    b.raw = io::can::codec_raw_range(*s);
     std::optional<FieldInfo> fi;
     if (send && field == "plant_step") {
       b.role = BoundRole::kPlantStep;

@@ -37,8 +37,7 @@ struct BoundSignal {
   BoundRole role = BoundRole::kField;
   int field = -1;       // kField: index into the family's field table (msgs/fields.hpp)
   double to_si = 1.0;   // the field's value = the signal's physical value * to_si
-  // integer signals: the raw range the codec's rule allows ([min, max] of the DBC, else the bits)
-  std::int64_t raw_lo = 0, raw_hi = 0;
+  io::can::RawRange raw;  // integer signals: what the codec's rule allows (io::can::codec_raw_range)
   std::uint64_t mask_bit = 0;  // received kField: its bit in the completion mask
 };
 

@@ -133,11 +133,14 @@ class CanWire {
         }
       }
       for (const BoundSignal& b : m.signals) {
-        const std::uint64_t mask = raw_mask(b.signal->length);
+        const std::uint64_t mask = io::can::raw_mask(b.signal->length);
         switch (b.role) {
           case BoundRole::kField: {
             const double v = Fields<Sensors>()[static_cast<std::size_t>(b.field)].get(s);
-            io::can::insert_raw(*b.signal, encode_value(b, b.to_si == 1.0 ? v : v / b.to_si, saturated), data);
+            bool sat = false;
+            io::can::insert_raw(*b.signal, io::can::encode_codec_rule(*b.signal, b.raw, b.to_si == 1.0 ? v : v / b.to_si, sat),
+                                data);
+            saturated += sat ? 1 : 0;
             break;
           }
           case BoundRole::kPlantStep:
@@ -307,46 +310,6 @@ class CanWire {
   static constexpr const auto& Fields() {
     return msgs::FieldTable<M>::kFields;
   }
-  static std::uint64_t raw_mask(int length) { return length >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << length) - 1; }
-  // The raw value as a signed number (integer signals).
-  static std::int64_t signed_raw(const io::can::DbcSignal& s, std::uint64_t raw) {
-    if (s.is_signed && s.length < 64 && ((raw >> (s.length - 1)) & 1u)) return static_cast<std::int64_t>(raw | ~raw_mask(s.length));
-    return static_cast<std::int64_t>(raw);
-  }
-  // physical -> raw bits by the codec's rule (io/can/codec.cpp to_raw), so that ehpt's contract
-  // as a binding sends the frames the codec does, bit for bit.
-  static std::uint64_t encode_value(const BoundSignal& b, double v, int& saturated) {
-    const io::can::DbcSignal& s = *b.signal;
-    if (s.value_type != io::can::SignalValueType::kInteger) {
-      if (!std::isfinite(v) || (s.has_range() && (v < s.min || v > s.max))) ++saturated;
-      return io::can::physical_to_raw(s, v);
-    }
-    std::int64_t r = 0;
-    if (std::isnan(v)) {
-      ++saturated;
-      r = std::clamp<std::int64_t>(0, b.raw_lo, b.raw_hi);
-    } else {
-      if (s.has_range() && v < s.min) {
-        v = s.min;
-        ++saturated;
-      } else if (s.has_range() && v > s.max) {
-        v = s.max;
-        ++saturated;
-      }
-      const double scaled = (v - s.offset) / s.factor;
-      if (!(scaled >= static_cast<double>(b.raw_lo) - 0.5)) {
-        r = b.raw_lo;
-        if (!s.has_range()) ++saturated;
-      } else if (!(scaled <= static_cast<double>(b.raw_hi) + 0.5)) {
-        r = b.raw_hi;
-        if (!s.has_range()) ++saturated;
-      } else {
-        r = std::clamp(static_cast<std::int64_t>(std::llround(scaled)), b.raw_lo, b.raw_hi);
-      }
-    }
-    return static_cast<std::uint64_t>(r) & raw_mask(s.length);
-  }
-
   // One received frame through the rules (the header's order); true if accepted (its fields
   // are then in incoming_ and their bits in received_mask_).
   bool accept(const io::can::Frame& f, std::int64_t now_step, std::int64_t sample_step, std::int64_t max_age_steps) {
@@ -387,32 +350,31 @@ class CanWire {
         }
         continue;
       }
-      const std::int64_t sr = signed_raw(*b.signal, io::can::extract_raw(*b.signal, data));
-      if (sr < b.raw_lo || sr > b.raw_hi) {
+      const std::int64_t raw = io::can::raw_to_int(*b.signal, io::can::extract_raw(*b.signal, data));
+      if (raw < b.raw.lo || raw > b.raw.hi) {
         ++r.counts.out_of_range;
         return false;
       }
     }
-    int counter = -1;
+    int counter = -1, counter_mask = 0;
     for (const BoundSignal& b : m.signals) {
       if (b.role == BoundRole::kEcho) {
         const std::uint64_t raw = io::can::extract_raw(*b.signal, data);
-        const std::uint64_t mask = raw_mask(b.signal->length);
+        const std::uint64_t mask = io::can::raw_mask(b.signal->length);
         const std::uint64_t age = (static_cast<std::uint64_t>(sample_step) - raw) & mask;
         if (age > static_cast<std::uint64_t>(std::min<std::int64_t>(max_age_steps, static_cast<std::int64_t>(mask)))) {
           ++r.counts.stale;
           return false;
         }
       }
-      if (b.role == BoundRole::kCounter) counter = static_cast<int>(io::can::extract_raw(*b.signal, data));
+      if (b.role == BoundRole::kCounter) {  // at most 16 bits (checked at load)
+        counter = static_cast<int>(io::can::extract_raw(*b.signal, data));
+        counter_mask = static_cast<int>(io::can::raw_mask(b.signal->length));
+      }
     }
     if (counter >= 0) {  // the codec's counter rule (io/can/codec.hpp counter_step), mod 2^length
-      int modulo_mask = 0;
-      for (const BoundSignal& b : m.signals) {
-        if (b.role == BoundRole::kCounter) modulo_mask = static_cast<int>(raw_mask(b.signal->length));
-      }
       if (r.last_counter >= 0) {
-        const int delta = (counter - r.last_counter) & modulo_mask;
+        const int delta = (counter - r.last_counter) & counter_mask;
         if (delta < 1 || delta > io::can::kMaxCounterJump) {
           ++r.counts.bad_counter;
           return false;

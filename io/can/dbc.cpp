@@ -846,9 +846,9 @@ class Parser {
   std::vector<ValueType> types_;
 };
 
-std::uint64_t raw_mask(int length) { return length >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << length) - 1; }
-
 }  // namespace
+
+std::uint64_t raw_mask(int length) { return length >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << length) - 1; }
 
 const DbcSignal* DbcMessage::signal(std::string_view signal_name) const {
   for (const DbcSignal& s : signals) {
@@ -958,10 +958,8 @@ double raw_to_physical(const DbcSignal& s, std::uint64_t raw) {
     value = f;
   } else if (s.value_type == SignalValueType::kFloat64) {
     std::memcpy(&value, &raw, sizeof value);
-  } else if (s.is_signed && s.length < 64 && ((raw >> (s.length - 1)) & 1u)) {
-    value = static_cast<double>(static_cast<std::int64_t>(raw | ~raw_mask(s.length)));
   } else if (s.is_signed) {
-    value = static_cast<double>(static_cast<std::int64_t>(raw));
+    value = static_cast<double>(raw_to_int(s, raw));
   } else {
     value = static_cast<double>(raw);
   }
@@ -1009,6 +1007,60 @@ bool is_present(const DbcMessage& m, const DbcSignal& s, std::span<const std::ui
   if (s.multiplex != Multiplex::kMultiplexed) return true;
   const DbcSignal* mux = m.multiplexor();
   return mux != nullptr && extract_raw(*mux, payload) == s.multiplex_value;
+}
+
+std::int64_t raw_to_int(const DbcSignal& s, std::uint64_t raw) {
+  if (s.is_signed && s.length < 64 && ((raw >> (s.length - 1)) & 1u)) return static_cast<std::int64_t>(raw | ~raw_mask(s.length));
+  return static_cast<std::int64_t>(raw);
+}
+
+RawRange codec_raw_range(const DbcSignal& s) {
+  RawRange r;
+  if (s.is_signed) {
+    r.lo = s.length >= 64 ? INT64_MIN : -(std::int64_t{1} << (s.length - 1));
+    r.hi = s.length >= 64 ? INT64_MAX : (std::int64_t{1} << (s.length - 1)) - 1;
+  } else {
+    r.lo = 0;
+    r.hi = s.length >= 63 ? INT64_MAX : (std::int64_t{1} << s.length) - 1;
+  }
+  if (!s.has_range() || s.value_type != SignalValueType::kInteger) return r;
+  double a = (s.min - s.offset) / s.factor, b = (s.max - s.offset) / s.factor;
+  if (a > b) std::swap(a, b);  // a negative factor
+  // the comparisons keep every conversion defined: beyond +-9e18 the bits' range stands
+  if (a > -9e18 && a < 9e18) r.lo = std::max(r.lo, static_cast<std::int64_t>(std::llround(a)));
+  if (b > -9e18 && b < 9e18) r.hi = std::min(r.hi, static_cast<std::int64_t>(std::llround(b)));
+  return r;
+}
+
+std::uint64_t encode_codec_rule(const DbcSignal& s, const RawRange& range, double v, bool& saturated) {
+  if (s.value_type != SignalValueType::kInteger) {
+    if (!std::isfinite(v) || (s.has_range() && (v < s.min || v > s.max))) saturated = true;
+    return physical_to_raw(s, v);
+  }
+  std::int64_t r = 0;
+  if (std::isnan(v)) {
+    saturated = true;
+    r = std::clamp<std::int64_t>(0, range.lo, range.hi);
+  } else {
+    if (s.has_range() && v < s.min) {
+      v = s.min;
+      saturated = true;
+    } else if (s.has_range() && v > s.max) {
+      v = s.max;
+      saturated = true;
+    }
+    const double scaled = (v - s.offset) / s.factor;
+    if (!(scaled >= static_cast<double>(range.lo) - 0.5)) {  // NaN-safe; also -inf without a range
+      r = range.lo;  // the bits cannot hold it (a DBC range wider than its bits, or none)
+      saturated = true;
+    } else if (!(scaled <= static_cast<double>(range.hi) + 0.5)) {
+      r = range.hi;
+      saturated = true;
+    } else {
+      r = std::clamp(static_cast<std::int64_t>(std::llround(scaled)), range.lo, range.hi);
+    }
+  }
+  return static_cast<std::uint64_t>(r) & raw_mask(s.length);
 }
 
 }  // namespace ehpt::io::can

@@ -132,6 +132,27 @@ inline void encode(const DbcSignal& s, double physical, std::span<std::uint8_t> 
   insert_raw(s, physical_to_raw(s, physical), payload);
 }
 
+// ---- the codec's rule (io/can/codec.hpp), for an integer signal of any DBC: what the plant's
+// bindings (hil/bus/bus_binding.hpp) send and check, so that ehpt's own contract as a binding
+// gives the codec's frames bit for bit. Pure, no allocation. ----
+
+// The low `length` bits set (1..64).
+std::uint64_t raw_mask(int length);
+// The raw bits as a number: sign-extended if the signal is signed.
+std::int64_t raw_to_int(const DbcSignal& s, std::uint64_t raw);
+struct RawRange {
+  std::int64_t lo = 0, hi = 0;
+};
+// Start-up: the raw values the codec's rule allows: the DBC's [min, max] as raw values, each
+// rounded half away from zero (as io/can/codec.cpp raw_min, raw_max), within what the bits hold
+// (an unsigned 64-bit signal: up to 2^63 - 1); the bits' range if the DBC gives none.
+RawRange codec_raw_range(const DbcSignal& s);
+// physical -> raw bits: clamped to [min, max] (saturated), rounded half away from zero, within
+// the range (saturated if the bits cannot hold it); NaN gives raw 0 clamped into the range
+// (saturated). Float
+// signals: physical_to_raw, saturated if not finite or outside [min, max].
+std::uint64_t encode_codec_rule(const DbcSignal& s, const RawRange& range, double physical, bool& saturated);
+
 // Start-up: whether the signal's bits all lie within payload_bytes (load checks it; exposed for tests).
 bool signal_fits(const DbcSignal& s, int payload_bytes);
 

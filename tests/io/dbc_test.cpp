@@ -391,6 +391,54 @@ TEST(Dbc, EncodeThenDecodeGivesTheValueToItsResolution) {
   }
 }
 
+// The codec's rule for any DBC's integer signal (what bindings send): the raw range of every
+// length and sign, the DBC's range within the bits, saturation counted where the bits cannot
+// hold a value the DBC allows.
+TEST(Dbc, TheCodecRuleRangesAndSaturation) {
+  DbcSignal s;
+  s.length = 64;
+  s.is_signed = true;
+  RawRange r = codec_raw_range(s);
+  EXPECT_EQ(r.lo, std::numeric_limits<std::int64_t>::min());
+  EXPECT_EQ(r.hi, std::numeric_limits<std::int64_t>::max());
+  s.is_signed = false;
+  r = codec_raw_range(s);
+  EXPECT_EQ(r.lo, 0);
+  EXPECT_EQ(r.hi, std::numeric_limits<std::int64_t>::max());
+  s.length = 12;
+  s.is_signed = true;
+  r = codec_raw_range(s);
+  EXPECT_EQ(r.lo, -2048);
+  EXPECT_EQ(r.hi, 2047);
+  EXPECT_EQ(raw_to_int(s, 0xFFF), -1);
+  EXPECT_EQ(raw_to_int(s, 0x7FF), 2047);
+  // a DBC range wider than the bits: the bits' range, and a value beyond them saturates
+  s.length = 16;
+  s.factor = 0.01;
+  s.min = -400.0;
+  s.max = 400.0;
+  r = codec_raw_range(s);
+  EXPECT_EQ(r.lo, -32768);
+  EXPECT_EQ(r.hi, 32767);
+  bool sat = false;
+  EXPECT_EQ(encode_codec_rule(s, r, 350.0, sat), 32767u);
+  EXPECT_TRUE(sat);
+  sat = false;
+  EXPECT_EQ(raw_to_int(s, encode_codec_rule(s, r, -12.345, sat)), -1235);  // half away from zero
+  EXPECT_FALSE(sat);
+  // a DBC range inside the bits: that range, raw values rounded as the codec does
+  s.min = -2.5;
+  s.max = 2.5;
+  r = codec_raw_range(s);
+  EXPECT_EQ(r.lo, -250);
+  EXPECT_EQ(r.hi, 250);
+  EXPECT_EQ(raw_to_int(s, encode_codec_rule(s, r, 9.0, sat)), 250);
+  EXPECT_TRUE(sat);
+  sat = false;
+  EXPECT_EQ(raw_to_int(s, encode_codec_rule(s, r, NAN, sat)), 0);
+  EXPECT_TRUE(sat);
+}
+
 TEST(Dbc, AMultiplexedSignalIsPresentOnlyWhenSelected) {
   const Dbc d = load_dbc(test::source_path("tests/io/dbc/multiplexed.dbc"));
   ASSERT_TRUE(d.ok()) << problems(d);
