@@ -276,17 +276,14 @@ int cmd_plant(const std::vector<std::string>& args) {
   } else {
     // the binding before the bus: its problems are the user's file's, reported with their lines
     const std::string family = ehpt::hil::bus_family(sc);
-    std::optional<ehpt::hil::Binding> binding;
-    if (a.bus_map.empty()) {
-      binding = ehpt::hil::default_binding(family, sc.ecu_timing.period_s);
-    } else {
-      std::vector<std::string> errors;
-      binding = ehpt::hil::load_binding(a.bus_map, family, sc.ecu_timing.period_s, errors);
-      for (const auto& e : errors) std::cerr << "error: " << e << "\n";
-      if (!binding) return 2;
-      if (!a.quiet) {
-        for (const auto& w : binding->warnings) std::cerr << "warning: " << w << "\n";
-      }
+    std::vector<std::string> errors;
+    std::optional<ehpt::hil::Binding> binding =
+        a.bus_map.empty() ? ehpt::hil::default_binding(family, sc.ecu_timing.period_s, errors)
+                          : ehpt::hil::load_binding(a.bus_map, family, sc.ecu_timing.period_s, errors);
+    for (const auto& e : errors) std::cerr << "error: " << e << "\n";
+    if (!binding) return 2;
+    if (!a.quiet) {
+      for (const auto& w : binding->warnings) std::cerr << "warning: " << w << "\n";
     }
     const std::vector<std::uint32_t> ids = binding->receive_ids();
     bus = ehpt::io::can::open_bus(a.spec, ehpt::io::can::BusRole::kPlant, ids, error);

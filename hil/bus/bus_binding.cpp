@@ -216,8 +216,10 @@ bool read_e2e(LoadState& st, const DbcMessage& m, const toml::node& node, BoundM
   const DbcSignal* cs = find_signal(st, m, *crc, t->get("crc"), where + "e2e: ");
   const DbcSignal* ks = find_signal(st, m, *counter, t->get("counter"), where + "e2e: ");
   if (cs == nullptr || ks == nullptr) return false;
-  if (cs->length != 8 || cs->start_bit % 8 != 0 || cs->value_type != io::can::SignalValueType::kInteger) {
-    st.r.error(t->get("crc"), where + "e2e: crc " + cs->name + " must be one whole byte (8 bits from a multiple of 8)");
+  // one whole byte: Intel from its bit 0, Motorola from its bit 7 (a Motorola start bit is the MSB)
+  const int byte_start = cs->byte_order == io::can::ByteOrder::kIntel ? 0 : 7;
+  if (cs->length != 8 || cs->start_bit % 8 != byte_start || cs->value_type != io::can::SignalValueType::kInteger) {
+    st.r.error(t->get("crc"), where + "e2e: crc " + cs->name + " must be one whole byte (8 bits filling one byte)");
     return false;
   }
   if (ks->length != 4 || ks->start_bit % 4 != 0 || ks->byte_order != io::can::ByteOrder::kIntel) {
@@ -278,6 +280,7 @@ bool read_e2e(LoadState& st, const DbcMessage& m, const toml::node& node, BoundM
     return false;
   }
   bm.e2e = c;
+  bm.e2e_signals = {cs, ks};
   return true;
 }
 
@@ -378,7 +381,7 @@ void read_message(LoadState& st, const toml::table& t, bool send) {
     st.r.error(sn != nullptr ? sn : &t, where + "`signals` must be a table: signals = { DbcSignal = \"plant_field\", ... }");
     return;
   }
-  std::set<const DbcSignal*> taken;
+  std::set<const DbcSignal*> taken(bm.e2e_signals.begin(), bm.e2e_signals.end());
   for (const auto& bs : bm.signals) taken.insert(bs.signal);
   for (const auto& [key, value] : *signals) {
     const std::string sig_name(key.str());
@@ -443,6 +446,12 @@ void read_message(LoadState& st, const toml::table& t, bool send) {
     }
     bm.signals.push_back(b);
   }
+  if (!send && std::none_of(bm.signals.begin(), bm.signals.end(),
+                            [](const BoundSignal& s) { return s.role == BoundRole::kField; })) {
+    // nothing of it would be waited for: its timeout could never start, nor a command need it
+    st.r.error(&t, where + "binds no plant input (give it signals = { DbcSignal = \"input\" }, or leave it out)");
+    return;
+  }
   auto& list = send ? st.b.send : st.b.receive;
   if (list.size() >= kMaxBoundMessages) {
     st.r.error(&t, where + "more than " + std::to_string(kMaxBoundMessages) + " messages in one direction");
@@ -480,9 +489,27 @@ std::vector<std::uint32_t> Binding::receive_ids() const {
   return ids;
 }
 
-std::optional<Binding> parse_binding(std::string_view binding_text, const std::string& binding_file,
-                                     std::string_view dbc_text, const std::string& dbc_file, const std::string& family,
-                                     double ecu_period_s, std::vector<std::string>& errors) {
+namespace {
+
+// The binding file as TOML (start-up), or nullopt with its line.
+std::optional<toml::table> parse_toml(std::string_view text, const std::string& file, std::vector<std::string>& errors) {
+  if (const int line = line_with_too_many_dots(text); line != 0) {
+    errors.push_back(file + ":" + std::to_string(line) + ": more than " + std::to_string(kMaxDotsPerLine) +
+                     " dots on one line");
+    return std::nullopt;
+  }
+  try {
+    return toml::parse(text, file);
+  } catch (const toml::parse_error& e) {
+    errors.push_back(file + ":" + std::to_string(e.source().begin.line) + ": TOML syntax: " + std::string(e.description()));
+  }
+  return std::nullopt;
+}
+
+// The binding's tables against its DBC's text.
+std::optional<Binding> from_table(const toml::table& root, const std::string& binding_file, std::string_view dbc_text,
+                                  const std::string& dbc_file, const std::string& family, double ecu_period_s,
+                                  std::vector<std::string>& errors) {
   const std::size_t errors_before = errors.size();
   const std::optional<Family> fam = family_of(family);
   if (!fam) {
@@ -496,19 +523,6 @@ std::optional<Binding> parse_binding(std::string_view binding_text, const std::s
   for (const auto& p : b.dbc.errors) errors.push_back(io::can::to_string(b.dbc, p));
   for (const auto& p : b.dbc.warnings) b.warnings.push_back(io::can::to_string(b.dbc, p));
   if (!b.dbc.ok()) return std::nullopt;
-  if (const int line = line_with_too_many_dots(binding_text); line != 0) {
-    errors.push_back(binding_file + ":" + std::to_string(line) + ": more than " + std::to_string(kMaxDotsPerLine) +
-                     " dots on one line");
-    return std::nullopt;
-  }
-  toml::table root;
-  try {
-    root = toml::parse(binding_text, binding_file);
-  } catch (const toml::parse_error& e) {
-    errors.push_back(binding_file + ":" + std::to_string(e.source().begin.line) + ": TOML syntax: " +
-                     std::string(e.description()));
-    return std::nullopt;
-  }
   Reader r{binding_file, errors, {}};
   r.only_keys(root, {"dbc", "plant_node", "send", "receive", "unbound"}, "");
   const std::string* node = r.text(root, "plant_node", "", true);
@@ -572,6 +586,16 @@ std::optional<Binding> parse_binding(std::string_view binding_text, const std::s
   return std::optional<Binding>(std::move(b));  // moved: the pointers into b.dbc stay valid
 }
 
+}  // namespace
+
+std::optional<Binding> parse_binding(std::string_view binding_text, const std::string& binding_file,
+                                     std::string_view dbc_text, const std::string& dbc_file, const std::string& family,
+                                     double ecu_period_s, std::vector<std::string>& errors) {
+  const std::optional<toml::table> root = parse_toml(binding_text, binding_file, errors);
+  if (!root) return std::nullopt;
+  return from_table(*root, binding_file, dbc_text, dbc_file, family, ecu_period_s, errors);
+}
+
 std::optional<Binding> load_binding(const std::string& path, const std::string& family, double ecu_period_s,
                                     std::vector<std::string>& errors) {
   std::string text, reason;
@@ -579,19 +603,9 @@ std::optional<Binding> load_binding(const std::string& path, const std::string& 
     errors.push_back(path + ": " + reason);
     return std::nullopt;
   }
-  if (const int line = line_with_too_many_dots(text); line != 0) {
-    errors.push_back(path + ":" + std::to_string(line) + ": more than " + std::to_string(kMaxDotsPerLine) +
-                     " dots on one line");
-    return std::nullopt;
-  }
-  toml::table root;
-  try {
-    root = toml::parse(text, path);
-  } catch (const toml::parse_error& e) {
-    errors.push_back(path + ":" + std::to_string(e.source().begin.line) + ": TOML syntax: " + std::string(e.description()));
-    return std::nullopt;
-  }
-  const toml::node* d = root.get("dbc");
+  const std::optional<toml::table> root = parse_toml(text, path, errors);
+  if (!root) return std::nullopt;
+  const toml::node* d = root->get("dbc");
   if (d == nullptr || !d->is_string() || d->as_string()->get().empty()) {
     errors.push_back((d != nullptr ? path + ":" + std::to_string(d->source().begin.line) : path) +
                      ": `dbc` must name the DBC file this binding's names are in (dbc = \"my_ecu.dbc\", relative to "
@@ -606,16 +620,12 @@ std::optional<Binding> load_binding(const std::string& path, const std::string& 
                      dbc_path.string() + ": " + reason);
     return std::nullopt;
   }
-  return parse_binding(text, path, dbc_text, dbc_path.string(), family, ecu_period_s, errors);
+  return from_table(*root, path, dbc_text, dbc_path.string(), family, ecu_period_s, errors);
 }
 
-Binding default_binding(const std::string& family, double ecu_period_s) {
-  std::vector<std::string> errors;
-  std::optional<Binding> b = parse_binding(builtin_binding_text(family), "<built-in ehpt-" + family + ".binding.toml>",
-                                           builtin_ehpt_dbc(), "<built-in ehpt.dbc>", family, ecu_period_s, errors);
-  // the built-in texts are the repository's files: a test loads them; failing here is a build defect
-  if (!b) std::abort();
-  return std::move(*b);
+std::optional<Binding> default_binding(const std::string& family, double ecu_period_s, std::vector<std::string>& errors) {
+  return parse_binding(builtin_binding_text(family), "<built-in ehpt-" + family + ".binding.toml>", builtin_ehpt_dbc(),
+                       "<built-in ehpt.dbc>", family, ecu_period_s, errors);
 }
 
 }  // namespace ehpt::hil

@@ -49,6 +49,7 @@ struct BoundMessage {
   double timeout_s = 0.0;   // received: older than this puts the plant in its safe state
   std::vector<BoundSignal> signals;  // bound fields and roles (the DBC's other signals: start values)
   std::optional<io::can::E2eConfig> e2e;
+  std::vector<const io::can::DbcSignal*> e2e_signals;  // its CRC and counter: no field may be bound to them
 };
 
 struct Binding {
@@ -83,8 +84,8 @@ std::optional<Binding> parse_binding(std::string_view binding_text, const std::s
                                      std::string_view dbc_text, const std::string& dbc_file, const std::string& family,
                                      double ecu_period_s, std::vector<std::string>& errors);
 // ehpt's own contract as a binding: io/can/ehpt.dbc with io/can/ehpt-<family>.binding.toml,
-// both compiled in. Always loads (a test holds it to that).
-Binding default_binding(const std::string& family, double ecu_period_s);
+// both compiled in (a test holds them to loading clean; nullopt only for an unknown family).
+std::optional<Binding> default_binding(const std::string& family, double ecu_period_s, std::vector<std::string>& errors);
 
 // The texts compiled in (generated from the files at build time).
 std::string_view builtin_ehpt_dbc();

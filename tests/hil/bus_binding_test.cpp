@@ -53,6 +53,13 @@ class LoopBus final : public io::can::Transport {
 
 constexpr double kStep = 0.001, kPeriod = 0.01;
 
+Binding contract(const char* family) {
+  std::vector<std::string> errors;
+  std::optional<Binding> b = default_binding(family, kPeriod, errors);
+  EXPECT_TRUE(b) << (errors.empty() ? "" : errors.front());
+  return std::move(b.value());
+}
+
 // A wire's report, parsed: report(path) is the integer at a path of keys ("rejected", "stale").
 struct Report {
   io::JsonValue root;
@@ -91,7 +98,7 @@ TEST(DefaultBinding, BothFamiliesLoadCleanAndListTheContractsIdsInOrder) {
     EXPECT_TRUE(b->warnings.empty()) << b->warnings.front();
     EXPECT_TRUE(b->echo);
   }
-  const Binding psd = default_binding("psd", kPeriod);
+  const Binding psd = contract("psd");
   std::vector<std::uint32_t> sent;
   for (const auto& m : psd.send) sent.push_back(m.message->id);
   EXPECT_EQ(sent, std::vector<std::uint32_t>(io::can::kPsdSensorIds.begin(), io::can::kPsdSensorIds.end()));
@@ -115,7 +122,7 @@ msgs::PsdSensors random_sensors(std::mt19937_64& rng, double spread) {
 
 TEST(DefaultBinding, SensorFramesEqualTheCodecsBitForBitWithTheSameSaturationCount) {
   LoopBus bus;
-  CanWire<msgs::PsdSensors> wire(bus, default_binding("psd", kPeriod), kStep, false, 3 * kPeriod, "can0");
+  CanWire<msgs::PsdSensors> wire(bus, contract("psd"), kStep, false, 3 * kPeriod, "can0");
   io::can::TxCounters tx;
   std::mt19937_64 rng(7);
   for (int i = 0; i < 20000; ++i) {
@@ -144,7 +151,7 @@ TEST(DefaultBinding, SensorFramesEqualTheCodecsBitForBitWithTheSameSaturationCou
 // rejects the others for the same reason, and assembles the same commands.
 TEST(DefaultBinding, CommandsAreTakenAndRejectedExactlyAsTheCodecsFilterDoes) {
   LoopBus bus;
-  CanWire<msgs::PsdSensors> wire(bus, default_binding("psd", kPeriod), kStep, true, 3 * kPeriod, "can0");
+  CanWire<msgs::PsdSensors> wire(bus, contract("psd"), kStep, true, 3 * kPeriod, "can0");
   io::can::FrameFilter filter(io::can::kPsdCommandIds);
   io::can::TxCounters tx;
   std::mt19937_64 rng(11);
@@ -225,7 +232,7 @@ TEST(DefaultBinding, CommandsAreTakenAndRejectedExactlyAsTheCodecsFilterDoes) {
 TEST(DefaultBinding, ACommandIsAssembledOnlyFromFramesOfOneSample) {
   for (const bool lockstep : {false, true}) {
     LoopBus bus;
-    CanWire<msgs::PsdSensors> wire(bus, default_binding("psd", kPeriod), kStep, lockstep, 3 * kPeriod, "can0");
+    CanWire<msgs::PsdSensors> wire(bus, contract("psd"), kStep, lockstep, 3 * kPeriod, "can0");
     io::can::TxCounters tx;
     const auto frames_for = [&](std::uint32_t step) {
       msgs::PsdCommand c;
@@ -285,6 +292,10 @@ BO_ 514 VCU_Mux: 8 VCU
 BO_ 515 VCU_Fd: 12 VCU
  SG_ X : 0|8@1+ (1,0) [0|255] "" HIL
 
+BO_ 259 HIL_Mux: 8 HIL
+ SG_ Sel M : 0|2@1+ (1,0) [0|3] "" VCU
+ SG_ A m0 : 8|8@1+ (1,0) [0|255] "" VCU
+
 BA_DEF_ BO_ "GenMsgCycleTime" INT 0 10000;
 BA_ "GenMsgCycleTime" BO_ 257 20;
 BA_ "GenMsgCycleTime" BO_ 2147484160 10;
@@ -320,7 +331,7 @@ Binding good() {
   std::vector<std::string> errors;
   auto b = parse(kBinding, errors);
   EXPECT_TRUE(b) << (errors.empty() ? "" : errors.front());
-  return std::move(*b);
+  return std::move(b.value());
 }
 
 TEST(UserBinding, UnitsConvertByName) {
@@ -470,6 +481,9 @@ TEST(UserBinding, EachErrorNamesFileLineAndWhatToDo) {
       {"counter = \"Alive\"", "countr = \"Alive\"", "unknown key `countr`; did you mean `counter`?"},
       {"[[receive]]\nmessage = \"VCU_Mux\"", "[[receive]]\nmessage = \"VCU_Cmd\"", "[[receive]] VCU_Cmd: bound twice"},
       {"dbc = \"x.dbc\"", "dbc = \"x.dbc\"\n[[bogus", "TOML syntax"},
+      {"message = \"HIL_Out\"", "message = \"HIL_Mux\"", "my.binding.toml:8: [[send]] HIL_Mux: a multiplexed message can be received, not sent"},
+      {"signals = { Trq = \"motTauRef_Nm\" }", "signals = { Crc = \"motTauRef_Nm\" }", "Crc: bound twice in this message (or also its counter, echo or E2E signal)"},
+      {"signals = { Trq = \"motTauRef_Nm\" }", "signals = {}", "my.binding.toml:12: [[receive]] VCU_Cmd: binds no plant input"},
   };
   for (const Case& c : cases) {
     std::string text = kBinding;
@@ -484,6 +498,23 @@ TEST(UserBinding, EachErrorNamesFileLineAndWhatToDo) {
     EXPECT_NE(all.find(c.want), std::string::npos) << "want: " << c.want << "\ngot:\n" << all;
     EXPECT_EQ(all.rfind("my.binding.toml:", 0), 0u) << all;
   }
+}
+
+// E2E's CRC is a whole byte in either byte order: Intel from the byte's bit 0, Motorola from its bit 7.
+TEST(UserBinding, AnE2eCrcByteInMotorolaOrderIsTheSameByte) {
+  std::string dbc = kDbc;
+  const std::string intel = " SG_ Crc : 0|8@1+ (1,0) [0|255] \"\" HIL";
+  dbc.replace(dbc.find(intel), intel.size(), " SG_ Crc : 7|8@0+ (1,0) [0|255] \"\" HIL");
+  std::vector<std::string> errors;
+  const auto b = parse(kBinding, errors, dbc.c_str());
+  ASSERT_TRUE(b) << (errors.empty() ? "" : errors.front());
+  EXPECT_EQ(b->receive[0].e2e->crc_byte, 0);
+  // Motorola from bit 0 would span two bytes: refused
+  dbc.replace(dbc.find(" SG_ Crc : 7|8@0+"), 17, " SG_ Crc : 0|8@0+");
+  errors.clear();
+  EXPECT_FALSE(parse(kBinding, errors, dbc.c_str()));
+  ASSERT_FALSE(errors.empty());
+  EXPECT_NE(errors.front().find("e2e: crc Crc must be one whole byte"), std::string::npos) << errors.front();
 }
 
 TEST(UserBinding, ADbcWithErrorsIsRefusedWithItsLine) {

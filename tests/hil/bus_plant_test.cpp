@@ -161,7 +161,10 @@ BusRun run_on(FollowerBus& bus, const Scenario& sc, const std::string& out_dir) 
   bo.lockstep_wait_s = 1e-4;  // a silent ECU costs 0.1 ms of wall time per sample
   bo.peer_wait_s = 0.05;      // one that never answers sample 0 costs 50 ms
   std::string error;
-  auto driver = make_bus_plant(sc, bus, bo, default_binding(bus_family(sc), sc.ecu_timing.period_s), error);
+  std::vector<std::string> errors;
+  auto binding = default_binding(bus_family(sc), sc.ecu_timing.period_s, errors);
+  EXPECT_TRUE(binding);
+  auto driver = make_bus_plant(sc, bus, bo, std::move(binding.value()), error);
   EXPECT_TRUE(driver) << error;
   io::OutputDir dir;
   EXPECT_TRUE(dir.open(out_dir, error)) << error;
