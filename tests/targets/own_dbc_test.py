@@ -16,8 +16,6 @@ multiplexed message in the path.
 import json
 import math
 import pathlib
-import socket
-import subprocess
 import sys
 import tempfile
 import time
@@ -27,7 +25,9 @@ import unittest
 SOURCE = pathlib.Path(__file__).resolve().parents[2]
 OWN = SOURCE / "examples" / "own_dbc"
 sys.path.insert(0, str(OWN))
+sys.path.insert(0, str(SOURCE / "tests" / "targets"))
 import vcu_ecu  # noqa: E402
+from bus_e2e_test import free_port, start, wait_listening  # noqa: E402
 import can  # noqa: E402
 import ehpt  # noqa: E402  (the module, on PYTHONPATH)
 
@@ -117,25 +117,6 @@ def reference_run(calibration):
     return sim.timeseries()
 
 
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def wait_listening(port, proc, timeout_s=20.0):
-    deadline = time.time() + timeout_s
-    while time.time() < deadline:
-        if proc.poll() is not None:
-            raise AssertionError("the plant ended early")
-        try:
-            with socket.create_connection(("127.0.0.1", port), timeout=0.2):
-                return
-        except OSError:
-            time.sleep(0.05)
-    raise AssertionError("the plant does not listen on %d" % port)
-
-
 def csv_columns(path):
     lines = pathlib.Path(path).read_text().splitlines()
     header = lines[0].split(",")
@@ -166,27 +147,26 @@ class OwnDbc(unittest.TestCase):
                 "--out", str(out), "--quiet"] + list(plant_extra)
         for s in sets:
             args += ["--set", s]
-        log = self.log = open(self.tmp / (out.name + ".plant.log"), "w")
-        plant = subprocess.Popen(args, stdout=log, stderr=subprocess.STDOUT)
+        plant = start(args, self.tmp)
         self.procs.append(plant)
         wait_listening(port, plant)
-        vlog = self.vlog = open(self.tmp / (out.name + ".vcu.log"), "w")
-        vcu = subprocess.Popen([sys.executable, str(OWN / "vcu_ecu.py"), "--port", str(port), "--calibration",
-                                str(self.cal), "--idle-timeout-s", "3"] + list(vcu_extra), stdout=vlog,
-                               stderr=subprocess.STDOUT)
+        vcu = start([sys.executable, str(OWN / "vcu_ecu.py"), "--port", str(port), "--calibration", str(self.cal),
+                     "--idle-timeout-s", "3"] + list(vcu_extra), self.tmp)
         self.procs.append(vcu)
         forged = forger(port) if forger else None
         rc = plant.wait(timeout=900)
         vcu.wait(timeout=60)
-        log.close()
-        vlog.close()
+        self.plant_err = plant.err_file.name
+        for p in (plant, vcu):
+            p.out_file.close()
+            p.err_file.close()
         summary = json.loads((out / "summary.json").read_text())
         return rc, summary, forged
 
     def test_lockstep_over_nedc_equals_the_same_vcu_in_process_bit_for_bit(self):
         out = self.tmp / "lockstep"
         rc, summary, _ = self.session(out, ["--lockstep"])
-        self.assertEqual(rc, 0, (self.tmp / "lockstep.plant.log").read_text())
+        self.assertEqual(rc, 0, pathlib.Path(self.plant_err).read_text())
         bus = summary["bus"]
         self.assertEqual(summary["status"], "ok")
         self.assertEqual(sum(bus["rejected"].values()), 0, bus["rejected"])
@@ -236,7 +216,7 @@ class OwnDbc(unittest.TestCase):
 
         forged = self.tmp / "forged"
         rc, summary, sent = self.session(forged, ["--lockstep"], sets=sets, forger=forge)
-        self.assertEqual(rc, 0, (self.tmp / "forged.plant.log").read_text())
+        self.assertEqual(rc, 0, pathlib.Path(self.plant_err).read_text())
         torque = summary["bus"]["messages_received"]["VCU_TorqueCmd"]
         self.assertEqual(torque["bad_crc"], sent)
         self.assertEqual(summary["bus"]["rejected"]["bad_crc"], sent)
@@ -252,7 +232,7 @@ class OwnDbc(unittest.TestCase):
         out = self.tmp / "cyclic"
         rc, summary, _ = self.session(out, [], vcu_extra=["--cyclic"], sets=["solver.duration_s=5"])
         bus = summary["bus"]
-        self.assertIn(rc, (0, 4), (self.tmp / "cyclic.plant.log").read_text())
+        self.assertIn(rc, (0, 4), pathlib.Path(self.plant_err).read_text())
         self.assertGreater(bus["commands_applied"], 300)  # ~3 frames per 10 ms for 5 s, each completes one
         self.assertEqual(bus["rejected"]["bad_crc"], 0)
         self.assertEqual(bus["rejected"]["stale"], 0)  # no echo: nothing can be stale by its step
