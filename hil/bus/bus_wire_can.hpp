@@ -60,6 +60,18 @@ class CanWire {
         asc_buf_(asc ? kLogFlushBytes : 1) {
     line_.reserve(96 + log_interface_.size());  // one candump (or ASC) line: never more
     tx_.resize(binding_.send.size());
+    for (std::size_t i = 0; i < tx_.size(); ++i) {  // unbound signals: their start values, once
+      const io::can::DbcMessage& m = *binding_.send[i].message;
+      for (const io::can::DbcSignal& sig : m.signals) {
+        if (sig.start_value_raw && sig.value_type == io::can::SignalValueType::kInteger) {
+          // the DBC's raw number, any size: through the codec's rule, clamped into what is allowed
+          bool clamped = false;
+          const std::uint64_t raw = io::can::encode_codec_rule(
+              sig, io::can::codec_raw_range(sig), *sig.start_value_raw * sig.factor + sig.offset, clamped);
+          io::can::insert_raw(sig, raw, std::span<std::uint8_t>(tx_[i].start.data(), static_cast<std::size_t>(m.size_bytes)));
+        }
+      }
+    }
     rx_.resize(binding_.receive.size());
     for (std::size_t j = 0; j < rx_.size(); ++j) {
       const double t = binding_.receive[j].timeout_s > 0.0 ? binding_.receive[j].timeout_s : command_timeout_s;
@@ -126,12 +138,8 @@ class CanWire {
       f.id = m.message->id;
       f.extended = m.message->extended;
       f.len = static_cast<std::uint8_t>(m.message->size_bytes);
+      f.data = tx.start;
       const std::span<std::uint8_t> data(f.data.data(), f.len);
-      for (const io::can::DbcSignal& sig : m.message->signals) {  // unbound signals: their start values
-        if (sig.start_value_raw && sig.value_type == io::can::SignalValueType::kInteger) {
-          io::can::insert_raw(sig, static_cast<std::uint64_t>(static_cast<std::int64_t>(*sig.start_value_raw)), data);
-        }
-      }
       for (const BoundSignal& b : m.signals) {
         const std::uint64_t mask = io::can::raw_mask(b.signal->length);
         switch (b.role) {
@@ -428,6 +436,7 @@ class CanWire {
     std::int64_t last_step = -1;  // the step it last went out
     std::uint64_t counter = 0;    // its rolling counter's next value
     unsigned e2e_counter = 0;     // its E2E alive counter's next value
+    std::array<std::uint8_t, 8> start{};  // its payload before the bound signals: start values of the others
   };
   struct RxCounts {
     std::int64_t accepted = 0, unknown_id = 0, wrong_length = 0, bad_crc = 0, bad_counter = 0, out_of_range = 0,

@@ -442,6 +442,26 @@ TEST(UserBinding, LatestValuesE2eMultiplexingAndPerMessageTimeouts) {
   EXPECT_EQ(cmds.size(), 2u);
 }
 
+// Unbound signals of a sent message carry their GenSigStartValue (raw), clamped into what the
+// codec's rule allows however large the DBC's number.
+TEST(UserBinding, UnboundSignalsCarryTheirStartValues) {
+  std::string dbc = kDbc;
+  const std::string out = " SG_ Alive : 40|4@1+ (1,0) [0|15] \"\" VCU\n";
+  dbc.replace(dbc.find(out), out.size(),
+              out + " SG_ Mode : 48|8@1+ (1,0) [0|200] \"\" VCU\n SG_ Huge : 56|8@1- (1,0) [0|0] \"\" VCU\n");
+  dbc += "BA_DEF_ SG_ \"GenSigStartValue\" FLOAT -1e300 1e300;\nBA_ \"GenSigStartValue\" SG_ 257 Mode 7;\n"
+         "BA_ \"GenSigStartValue\" SG_ 257 Huge 1e300;\n";
+  std::vector<std::string> errors;
+  auto b = parse(kBinding, errors, dbc.c_str());
+  ASSERT_TRUE(b) << (errors.empty() ? "" : errors.front());
+  LoopBus bus;
+  CanWire<msgs::PsdSensors> wire(bus, std::move(b.value()), kStep, false, 3 * kPeriod, "can0");
+  wire.send_sample(msgs::PsdSensors{}, 0, false);
+  ASSERT_EQ(bus.sent.size(), 1u);
+  EXPECT_EQ(bus.sent[0].data[6], 7);     // Mode
+  EXPECT_EQ(bus.sent[0].data[7], 0x7F);  // Huge: the largest an 8-bit signed signal holds
+}
+
 TEST(UserBinding, TheStandardFrameOfAnExtendedIdIsNotIt) {
   LoopBus bus;
   const Binding b = good();
