@@ -52,6 +52,7 @@ struct Ecu {
     ehpt_lcm::ev_command_t c{};
     c.utime = utime_now();
     c.step = s->step;
+    c.session = s->session;  // names the plant it answers: another plant on this URL ignores it
     // The driver's request, within the limit. std::clamp keeps the value bit for bit when
     // it is inside the limit (no arithmetic), which is what makes runs reproducible.
     c.driveTauRef_Nm = std::clamp(s->driverRequest_Nm, -torque_limit_Nm, torque_limit_Nm);

@@ -96,7 +96,10 @@ class CanEcuWire {
   std::int64_t incomplete_ = 0;
 };
 
-// The ECU's side over LCM: one message per sample, one per command.
+// The ECU's side over LCM: one message per sample, one per command. It follows one plant
+// session (the first it hears, or a new one once the followed plant has been silent for
+// kSessionSilence_ns: a restarted plant) and names it in every command; samples of other
+// plants on the same URL and prefix are counted and left unanswered.
 template <class Sensors>
 class LcmEcuWire {
   using SensorsMsg = typename io::lcm::LcmTypesOf<Sensors>::SensorsMsg;
@@ -125,6 +128,7 @@ class LcmEcuWire {
   std::int64_t send_command(const Command& c) {
     CommandMsg m{};
     io::lcm::to_lcm(c, lcm_utime_now(), m);
+    m.session = session_;
     const int n = m.encode(out_.data(), 0, static_cast<int>(out_.size()));
     if (n > 0) bus_.publish(command_channel_.c_str(), out_.data(), n);
     return 0;
@@ -132,7 +136,7 @@ class LcmEcuWire {
 
   void summary(std::ostream& log) const {
     log << "messages in " << bus_.counters().received << ", out " << bus_.counters().published << ", malformed "
-        << malformed_ << ", dropped " << dropped_;
+        << malformed_ << ", dropped " << dropped_ << ", other plant sessions' samples ignored " << foreign_;
   }
 
  private:
@@ -143,6 +147,15 @@ class LcmEcuWire {
       ++self->malformed_;
       return;
     }
+    const std::int64_t t = now_ns();
+    if (m.session != self->session_) {
+      if (self->session_ != 0 && t - self->heard_ns_ < kSessionSilence_ns) {
+        ++self->foreign_;  // another plant on this URL and prefix: never answered with our state
+        return;
+      }
+      self->session_ = m.session;  // the first plant heard, or the followed one restarted
+    }
+    self->heard_ns_ = t;
     if (self->pending_count_ == self->pending_.size()) {  // more samples in one drain than it holds
       ++self->dropped_;
       return;
@@ -160,7 +173,9 @@ class LcmEcuWire {
   std::array<Sensors, 16> pending_{};
   std::size_t pending_count_ = 0;
   std::uint32_t sequence_ = 0;
-  std::int64_t malformed_ = 0, dropped_ = 0;
+  std::int64_t malformed_ = 0, dropped_ = 0, foreign_ = 0;
+  static constexpr std::int64_t kSessionSilence_ns = 1'000'000'000;
+  std::int64_t session_ = 0, heard_ns_ = 0;  // the followed plant session, when it was last heard
 };
 
 template <class Wire, class Controller>

@@ -10,9 +10,13 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <chrono>
+#include <sstream>
+#include <thread>
 #include <vector>
 
 #include "alloc_counter.hpp"
+#include "hil/bus/bus_ecu.hpp"
 #include "hil/bus/bus_plant.hpp"
 #include "hil/run/simulation.hpp"
 #include "io/lcm/lcm_bus.hpp"
@@ -114,6 +118,8 @@ TEST(LcmTypes, EveryFieldRoundTripsExactly) {
   ec.driveTauRef_Nm = 10.4166666;  // the value the strict-aliasing bug turned into 0
   ehpt_lcm::ev_command_t ecm{};
   io::lcm::to_lcm(ec, 5, ecm);
+  ecm.session = 0x7edcba9876543210;
+  EXPECT_EQ(round_trip(ecm).session, 0x7edcba9876543210);
   msgs::EvCommand ecb;
   io::lcm::from_lcm(round_trip(ecm), ecb);
   EXPECT_EQ(ecb.driveTauRef_Nm, 10.4166666);
@@ -133,16 +139,19 @@ TEST(LcmSpec, UrlsAreCheckedBeforeAnythingOpens) {
 }
 
 // The EV's follower as an LCM subscriber: it answers each sample inside the handler.
-// hostile: per sample also garbage, a command for an old and for a future sample (each with
-// a torque of 999 N m), and the real one twice.
+// hostile: per sample also garbage, a command for an old and for a future sample, two for this
+// sample naming another plant session and none (each with a torque of 999 N m), and the real
+// one twice.
 struct FollowerOnLcm {
   io::lcm::LcmBus* bus;
   bool hostile = false;
   std::vector<std::uint8_t> out = std::vector<std::uint8_t>(64);
-  void send(std::int64_t step, double torque_Nm, std::int64_t utime) {
+  std::int64_t session = 0;  // the plant's, from its samples
+  void send(std::int64_t step, double torque_Nm, std::int64_t utime, std::int64_t to_session) {
     ehpt_lcm::ev_command_t c{};
     c.utime = utime;
     c.step = step;
+    c.session = to_session;
     c.driveTauRef_Nm = torque_Nm;
     const int n = c.encode(out.data(), 0, static_cast<int>(out.size()));
     bus->publish("EHPT_ECU_COMMAND", out.data(), n);
@@ -151,19 +160,25 @@ struct FollowerOnLcm {
     auto* self = static_cast<FollowerOnLcm*>(user);
     ehpt_lcm::ev_sensors_t m{};
     if (m.decode(data, 0, size) != size) return;
+    EXPECT_NE(m.session, 0);
+    if (self->session == 0) self->session = m.session;
+    EXPECT_EQ(m.session, self->session);  // one plant session: the same id in every sample
+    const std::int64_t own = m.session;
     if (self->hostile) {
       const std::uint8_t garbage[5] = {1, 2, 3, 4, 5};
       self->bus->publish("EHPT_ECU_COMMAND", garbage, sizeof garbage);
-      if (m.step >= 10) self->send(m.step - 10, 999.0, m.utime);  // the previous sample's
-      self->send(m.step + 10, 999.0, m.utime);                    // a sample not sent yet
+      if (m.step >= 10) self->send(m.step - 10, 999.0, m.utime, own);  // the previous sample's
+      self->send(m.step + 10, 999.0, m.utime, own);                    // a sample not sent yet
+      self->send(m.step, 999.0, m.utime, own ^ 1);  // this sample's, for another plant on the URL
+      self->send(m.step, 999.0, m.utime, 0);        // this sample's, from an ECU that names no plant
       // this sample's, but not a number the plant may apply (first: it must not take the slot)
       for (const double bad : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(),
                                -std::numeric_limits<double>::infinity()}) {
-        self->send(m.step, bad, m.utime);
+        self->send(m.step, bad, m.utime, own);
       }
     }
-    self->send(m.step, m.driverRequest_Nm, m.utime);  // what ecu::EvFollower does
-    if (self->hostile) self->send(m.step, m.driverRequest_Nm, m.utime);  // again: a repeat
+    self->send(m.step, m.driverRequest_Nm, m.utime, own);  // what ecu::EvFollower does
+    if (self->hostile) self->send(m.step, m.driverRequest_Nm, m.utime, own);  // again: a repeat
   }
 };
 
@@ -228,11 +243,64 @@ TEST(LcmMemq, LockstepInOneProcessIsBitIdenticalToTheInProcessRun) {
 TEST(LcmMemq, HostileMessagesAreCountedByReasonAndChangeNothing) {
   std::string j;
   lockstep_in_one_process("memq://", true, &j);  // bit-identical: checked inside
-  // per sample (3001): garbage, an old and a future sample's command, NaN, +inf and -inf for
-  // this sample, the real one twice
+  // per sample (3001): garbage, an old and a future sample's command, two for another (or no)
+  // plant session, NaN, +inf and -inf for this sample, the real one twice
   for (const char* want : {"\"malformed\": 3001", "\"stale\": 6001", "\"repeated\": 3001", "\"non_finite\": 9003",
-                           "\"messages_accepted\": 3001"}) {
+                           "\"foreign\": 6002", "\"messages_accepted\": 3001"}) {
     EXPECT_NE(j.find(want), std::string::npos) << want << " in " << j;
+  }
+}
+
+// ehpt ecu over LCM with two plants on one URL and prefix: it follows the first session it
+// hears, answers only that plant's samples, names it in every command, and counts the other's.
+struct CommandTap {
+  std::vector<ehpt_lcm::ev_command_t> got;
+  static void on_command(const void* data, int size, void* user) {
+    ehpt_lcm::ev_command_t c{};
+    if (c.decode(data, 0, size) == size) static_cast<CommandTap*>(user)->got.push_back(c);
+  }
+};
+
+TEST(LcmMemq, TheBusEcuFollowsOnePlantSessionAndIgnoresAnother) {
+  const hil::Scenario sc = test::load(test::source_path("scenarios/ev_nedc.toml"), {});
+  std::string error;
+  auto bus = io::lcm::LcmBus::open("memq://", error);
+  ASSERT_TRUE(bus) << error;
+  CommandTap tap;
+  ASSERT_TRUE(bus->subscribe("EHPT_ECU_COMMAND", &CommandTap::on_command, &tap, error)) << error;
+  constexpr std::int64_t kA = 0x1111, kB = 0x2222;
+  constexpr int kSamples = 12;  // of each plant, interleaved (A first): fits the ECU's drain buffer
+  // memq drops what is published before anyone subscribes: the plants publish from a thread
+  // once the ECU has subscribed (liblcm's publish is thread-safe)
+  std::thread plants([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(150));
+    std::vector<std::uint8_t> out(256);
+    for (int k = 0; k < kSamples; ++k) {
+      for (const std::int64_t session : {kA, kB}) {
+        ehpt_lcm::ev_sensors_t m{};
+        m.step = 10 * k;
+        m.session = session;
+        m.driverRequest_Nm = session == kA ? 100.0 + k : -500.0;  // B's request: never answered
+        const int n = m.encode(out.data(), 0, static_cast<int>(out.size()));
+        if (n > 0) bus->publish("EHPT_PLANT_STATUS", out.data(), n);
+      }
+    }
+  });
+  hil::BusEcuOptions opt;
+  opt.idle_timeout_s = 0.3;
+  opt.max_samples = kSamples;
+  std::ostringstream log;
+  const hil::BusEcuResult r = hil::run_bus_ecu(sc, *bus, "EHPT_", opt, nullptr, log);
+  plants.join();
+  bus->handle_now();  // the last commands, if the ECU stopped before its own drain took them
+  EXPECT_EQ(r.samples, kSamples) << log.str();
+  EXPECT_NE(log.str().find("other plant sessions' samples ignored " + std::to_string(kSamples)), std::string::npos)
+      << log.str();
+  ASSERT_EQ(tap.got.size(), static_cast<std::size_t>(kSamples));
+  for (int k = 0; k < kSamples; ++k) {
+    EXPECT_EQ(tap.got[static_cast<std::size_t>(k)].session, kA) << k;
+    EXPECT_EQ(tap.got[static_cast<std::size_t>(k)].step, 10 * k) << k;
+    EXPECT_EQ(tap.got[static_cast<std::size_t>(k)].driveTauRef_Nm, 100.0 + k) << k;  // the follower: A's request
   }
 }
 

@@ -6,6 +6,8 @@
 //   - the status steps are 0, P, 2P, ... with none missing (P = PERIOD_STEPS, default 10:
 //     a 10 ms ECU period at the 1 ms step); sample 0 may repeat before the next one, as the
 //     plant re-sends it until a first ECU answers;
+//   - every status sample names one plant session (the same non-zero id throughout), and
+//     every command names that session;
 //   - each command's step is the step of a status sample logged before it. One exception,
 //     measured: multicast on loopback delivers each datagram to each socket in turn, so the
 //     logger may get a command a few microseconds before the sample it answers when the ECU
@@ -59,7 +61,7 @@ int main(int argc, char** argv) {
   long status = 0, command = 0, reordered = 0;
   bool held = false;  // a command logged just before its sample (see above)
   ehpt_lcm::ev_command_t held_command{};
-  std::int64_t first_step = -1, last_step = -1;
+  std::int64_t first_step = -1, last_step = -1, session = 0;
   int rc = 0;
   while (lcm_eventlog_event_t* e = lcm_eventlog_read_next_event(log)) {
     const std::string channel(e->channel, static_cast<std::size_t>(e->channellen));
@@ -67,16 +69,20 @@ int main(int argc, char** argv) {
       ehpt_lcm::ev_sensors_t m{};
       if (m.decode(e->data, 0, e->datalen) != e->datalen) {
         rc = fail(e, "does not decode as ev_sensors_t");
+      } else if (m.session == 0 || (session != 0 && m.session != session)) {
+        rc = fail(e, "status session " + std::to_string(m.session) +
+                         (session == 0 ? " (0 names no plant)" : " after " + std::to_string(session)));
       } else if (status == 0 && m.step != 0) {
         rc = fail(e, "the first status step is " + std::to_string(m.step) + ", not 0");
       } else if (status > 0 && !(m.step == last_step + period || (m.step == 0 && last_step == 0))) {
         rc = fail(e, "status step " + std::to_string(m.step) + " after " + std::to_string(last_step) +
                          " (expected " + std::to_string(last_step + period) + ")");
-      } else if (held && (m.step != held_command.step || held_command.utime < m.utime)) {
+      } else if (held && (m.step != held_command.step || held_command.utime < m.utime || held_command.session != m.session)) {
         rc = fail(e, "a command for step " + std::to_string(held_command.step) +
                          " was logged before its sample, and is not this sample's answer sent after it");
       } else {
         if (status == 0) first_step = m.step;
+        session = m.session;
         last_step = m.step;
         ++status;
         if (held) {
@@ -89,6 +95,8 @@ int main(int argc, char** argv) {
       ehpt_lcm::ev_command_t m{};
       if (m.decode(e->data, 0, e->datalen) != e->datalen) {
         rc = fail(e, "does not decode as ev_command_t");
+      } else if (session != 0 && m.session != session) {  // (a first command held before any sample: below)
+        rc = fail(e, "command session " + std::to_string(m.session) + ", the plant's is " + std::to_string(session));
       } else if (!held && m.step == (status == 0 ? 0 : last_step + period)) {
         held = true;  // its sample must come next (see above)
         held_command = m;

@@ -178,13 +178,16 @@ def checker_rejects(tool, good_log, tmp):
     k = next(k for k in range(500, SAMPLES) if command[k] == status[k] + 1)
     s500, c500 = status[k], command[k]
 
-    def patched(i, field, value):  # a payload with an int64 field replaced (0: utime, 1: step)
+    def patched(i, field, value):  # a payload with an int64 field replaced (0: utime, 1: step, 2: session)
         channel, data = events[i]
         off = 8 + 8 * field  # after the type's 8-byte fingerprint
         return channel, data[:off] + struct.pack(">q", value) + data[off + 8:]
 
     def utime(i):
         return struct.unpack_from(">q", events[i][1], 8)[0]
+
+    def session(i):
+        return struct.unpack_from(">q", events[i][1], 24)[0]
 
     swapped = events[:s500] + [events[c500], events[s500]] + events[c500 + 1:]
     cases = {
@@ -198,6 +201,12 @@ def checker_rejects(tool, good_log, tmp):
         "a command logged and sent before its sample": events[:s500] + [patched(c500, 0, utime(s500) - 1),
                                                                         events[s500]] + events[c500 + 1:],
         "a last command without its sample": [e for i, e in enumerate(events) if i != status[-1]],
+        "a command naming another plant session": [patched(i, 2, session(c500) ^ 1) if i == c500 else e
+                                                   for i, e in enumerate(events)],
+        "a status sample of another plant session": [patched(i, 2, session(s500) ^ 1) if i == s500 else e
+                                                     for i, e in enumerate(events)],
+        "samples naming no plant session": [patched(i, 2, 0) if c == "EHPT_PLANT_STATUS" else (c, d)
+                                            for i, (c, d) in enumerate(events)],
     }
     rc, line, err = log_check(tool, write_lcm_log(tmp / "swapped.lcmlog", swapped))
     check(rc == 0 and line.startswith("status %d command %d " % (SAMPLES, SAMPLES)) and "logged just before" in err,
@@ -275,6 +284,33 @@ def test_main(ehpt, tool, example):
     check(max(map(abs, ask)) > 50 and max(map(abs, got)) <= 50 and max(map(abs, got)) > 49,
           "--torque-limit-Nm 50: the driver asks up to %.1f Nm, the reference reaches %.1f Nm"
           % (max(map(abs, ask)), max(map(abs, got))))
+
+    # 2c. two plants on one URL and prefix, one example ECU that answers every sample it hears
+    # naming its plant's session: each plant takes only its own commands (the other plant's are
+    # counted as foreign), so each equals its own `ehpt run`; and each says the bus was shared
+    two = {}
+    ecu = start([example, "--url", URL, "--idle-timeout-s", "2"], tmp, "two_plants_ecu")
+    time.sleep(0.3)
+    for scenario in ("ev_nedc", "ev_sort1"):
+        two[scenario] = start([ehpt, "plant", scenario, "--bus", "lcm:" + URL, "--lockstep", "--quiet", "--out",
+                               str(tmp / ("two_" + scenario))] + long_sets, tmp, "two_plants_" + scenario)
+    for scenario, p in two.items():
+        rc, _, err = finish(p)
+        ref = tmp / ("two_ref_" + scenario)
+        subprocess.run([ehpt, "run", scenario, "--quiet", "--out", str(ref)] + long_sets, capture_output=True,
+                       timeout=120)
+        out = tmp / ("two_" + scenario)
+        bus = json.loads((out / "summary.json").read_text())["bus"] if (out / "summary.json").exists() else {}
+        foreign = bus.get("rejected", {}).get("foreign", 0)
+        check(rc == 4 and "commands named another plant session on this URL and prefix" in err,
+              "two plants on one URL: %s ends degraded (exit 4) naming the shared bus: exit %d, '%s'"
+              % (scenario, rc, err.strip()[-300:]))
+        check(foreign > 0 and bus.get("commands_applied") == DRIVING_S * 100 + 1,
+              "two plants on one URL: %s took its %d commands and ignored %d of the other plant's"
+              % (scenario, bus.get("commands_applied", 0), foreign))
+        check((ref / "timeseries.csv").read_bytes() == (out / "timeseries.csv").read_bytes(),
+              "two plants on one URL: %s's timeseries == its own ehpt run's (byte for byte)" % scenario)
+    finish(ecu)
 
     # 3. the checker refuses what it must
     checker_rejects(tool, log, tmp)
