@@ -17,8 +17,10 @@ namespace {
 template <class Sensors, class Command>
 class ReplayDriver final : public ExternalDriver, public EcuPort<Sensors, Command> {
  public:
-  ReplayDriver(const std::vector<RecordedCommand<Command>>& records, const InputsLog& log, std::string log_path)
-      : records_(records), log_(log), log_path_(std::move(log_path)) {}
+  ReplayDriver(const InputsLog& log, std::string log_path)
+      : log_(log), log_path_(std::move(log_path)), reader_(log_path_, log) {
+    has_next_ = reader_.next(next_step_, next_);
+  }
 
   bool open(const io::OutputDir&, std::string&) override { return true; }
 
@@ -28,10 +30,11 @@ class ReplayDriver final : public ExternalDriver, public EcuPort<Sensors, Comman
 
   bool commands_due(std::int64_t n, Command& command) override {
     bool applied = false;
-    while (next_ < records_.size() && records_[next_].step <= n) {
-      command = records_[next_].command;
-      ++next_;
+    while (has_next_ && next_step_ <= n) {  // the log streamed: one command ahead
+      command = next_;
+      ++applied_;
       applied = true;
+      has_next_ = reader_.next(next_step_, next_);
     }
     return applied;
   }
@@ -39,7 +42,18 @@ class ReplayDriver final : public ExternalDriver, public EcuPort<Sensors, Comman
 
   bool flush(std::string& error) override {
     if (!attach_error_.empty()) error = attach_error_;
-    return attach_error_.empty();
+    if (attach_error_.empty() && !reader_.error().empty()) error = reader_.error();
+    return error.empty();
+  }
+
+  // The end: the rest of the log is read too (not applied: the session stopped there), so
+  // that a log changed while it was replayed is caught by its SHA-256 in every case.
+  bool finish(std::string& error) override {
+    std::int64_t step = 0;
+    Command c{};
+    while (reader_.next(step, c)) {
+    }
+    return flush(error);
   }
 
   CommandSource command_source() const override {
@@ -52,18 +66,21 @@ class ReplayDriver final : public ExternalDriver, public EcuPort<Sensors, Comman
     io::JsonObject r;
     r.text("inputs_log", log_path_);
     r.text("recorded_pacing", log_.pacing);
-    r.integer("commands_recorded", static_cast<std::int64_t>(records_.size()));
-    r.integer("commands_applied", static_cast<std::int64_t>(next_));
+    r.integer("commands_recorded", log_.commands);
+    r.integer("commands_applied", applied_);
     summary.object("replay", r);
-    text += "replay        " + std::to_string(next_) + " of " + std::to_string(records_.size()) +
+    text += "replay        " + std::to_string(applied_) + " of " + std::to_string(log_.commands) +
             " recorded commands applied (" + log_.pacing + " session, " + log_path_ + ")\n";
   }
 
  private:
-  const std::vector<RecordedCommand<Command>>& records_;
   const InputsLog& log_;
   std::string log_path_;
-  std::size_t next_ = 0;
+  InputsLogReader reader_;
+  bool has_next_ = false;
+  std::int64_t next_step_ = 0;
+  Command next_{};
+  std::int64_t applied_ = 0;
   std::string attach_error_;
 };
 
@@ -71,9 +88,9 @@ class ReplayDriver final : public ExternalDriver, public EcuPort<Sensors, Comman
 
 std::unique_ptr<ExternalDriver> make_replay_driver(const InputsLog& log, const std::string& log_path) {
   if (log.family == "psd") {
-    return std::make_unique<ReplayDriver<msgs::PsdSensors, msgs::PsdCommand>>(log.psd, log, log_path);
+    return std::make_unique<ReplayDriver<msgs::PsdSensors, msgs::PsdCommand>>(log, log_path);
   }
-  return std::make_unique<ReplayDriver<msgs::EvSensors, msgs::EvCommand>>(log.ev, log, log_path);
+  return std::make_unique<ReplayDriver<msgs::EvSensors, msgs::EvCommand>>(log, log_path);
 }
 
 }  // namespace ehpt::hil

@@ -5,19 +5,13 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <sstream>
+#include <cstring>
+#include <limits>
+#include <optional>
 
 #include "io/sha256.hpp"
-#include "io/text_file.hpp"
 
 namespace ehpt::hil {
-
-namespace {
-
-// A session of hours at 100 commands per second is tens of MB: more than an input file.
-constexpr std::size_t kMaxLogBytes = std::size_t{1} << 30;
-
-}  // namespace
 
 int format_command(char* buf, std::size_t size, std::int64_t step, const msgs::EvCommand& c) {
   return std::snprintf(buf, size, "ev %lld %u %lld %.17g %.17g", static_cast<long long>(step), c.stamp.sequence,
@@ -38,116 +32,282 @@ std::string inputs_log_header(const std::string& scenario_path, const std::vecto
   return h;
 }
 
-bool read_inputs_log(const std::string& path, InputsLog& out, std::vector<std::string>& problems) {
-  std::string text, reason;
-  if (!io::read_text_file(path, text, reason, kMaxLogBytes)) {
-    problems.push_back(path + ": " + reason);
+namespace {
+
+// The next whitespace-separated token of `rest` (advanced past it); empty at the end.
+std::string_view next_token(std::string_view& rest) {
+  std::size_t i = 0;
+  while (i < rest.size() && (rest[i] == ' ' || rest[i] == '\t')) ++i;
+  std::size_t j = i;
+  while (j < rest.size() && rest[j] != ' ' && rest[j] != '\t') ++j;
+  const std::string_view tok = rest.substr(i, j - i);
+  rest.remove_prefix(j);
+  return tok;
+}
+
+// A token as a C string for strtoll/strtod (a token this long is no number of ours).
+bool c_token(std::string_view tok, std::array<char, 64>& buf) {
+  if (tok.empty() || tok.size() >= buf.size()) return false;
+  tok.copy(buf.data(), tok.size());
+  buf[tok.size()] = '\0';
+  return true;
+}
+
+bool parse_integer(std::string_view tok, long long lo, long long hi, long long& v) {
+  std::array<char, 64> buf{};
+  if (!c_token(tok, buf)) return false;
+  char* end = nullptr;
+  errno = 0;
+  v = std::strtoll(buf.data(), &end, 10);
+  return end != buf.data() && *end == '\0' && errno != ERANGE && v >= lo && v <= hi;
+}
+
+// exact for the 17 digits written; inf and nan refused
+bool parse_finite(std::string_view tok, double& v) {
+  std::array<char, 64> buf{};
+  if (!c_token(tok, buf)) return false;
+  char* end = nullptr;
+  errno = 0;
+  v = std::strtod(buf.data(), &end);
+  return end != buf.data() && *end == '\0' && errno != ERANGE && std::isfinite(v);
+}
+
+}  // namespace
+
+bool parse_inputs_line(std::string_view line, InputsLogLine& out, std::string& why) {
+  std::string_view rest = line;
+  out.family = next_token(rest);
+  long long step = 0, sequence = 0, stamp_step = 0;
+  const std::string_view t_step = next_token(rest), t_seq = next_token(rest), t_stamp = next_token(rest);
+  if (!parse_integer(t_step, 0, std::numeric_limits<std::int64_t>::max(), step) ||
+      !parse_integer(t_seq, 0, std::numeric_limits<std::uint32_t>::max(), sequence) ||
+      !parse_integer(t_stamp, std::numeric_limits<std::int64_t>::min(), std::numeric_limits<std::int64_t>::max(),
+                     stamp_step)) {
+    why = "expected FAMILY STEP SEQUENCE STAMP_STEP (STEP >= 0, SEQUENCE 0..4294967295) and numbers";
     return false;
   }
-  out.file = InputFile{path, io::sha256_hex(text), text.size()};
-  std::istringstream in(text);
-  std::string line;
+  out.step = step;
+  out.sequence = static_cast<std::uint32_t>(sequence);  // range checked above
+  out.stamp_step = stamp_step;
+  out.n_values = 0;
+  for (std::string_view tok = next_token(rest); !tok.empty(); tok = next_token(rest)) {
+    double v = 0.0;
+    if (!parse_finite(tok, v)) {
+      why = "'" + std::string(tok.substr(0, 40)) + (tok.size() > 40 ? "...'" : "'") + " is not a finite number";
+      return false;
+    }
+    if (out.n_values == out.values.size()) {
+      why = "more than " + std::to_string(out.values.size() + 4) + " fields";
+      return false;
+    }
+    out.values[out.n_values++] = v;
+  }
+  return true;
+}
+
+// A file as lines, in fixed memory: one block of it and one line at a time. Every byte read
+// goes through the SHA-256, so the digest is the file's (sha256sum's), whatever its lines.
+struct InputsLogLines {
+  std::FILE* f = nullptr;
+  std::array<char, 65536> block{};
+  std::size_t block_len = 0, block_pos = 0;
+  std::array<char, kMaxInputsLineBytes> line{};
+  std::size_t line_len = 0;
+  bool too_long = false;  // the current line is longer than kMaxInputsLineBytes (the rest skipped)
   int line_no = 0;
-  std::int64_t last_step = 0;
-  bool version = false;
-  const auto bad = [&](const std::string& what) {
-    if (problems.size() < 20) problems.push_back(path + ":" + std::to_string(line_no) + ": " + what);
-  };
-  bool commands_seen = false;
-  while (std::getline(in, line)) {
+  std::uint64_t bytes = 0;
+  io::Sha256 sha;
+  bool read_error = false;
+
+  explicit InputsLogLines(const std::string& path) : f(std::fopen(path.c_str(), "rb")) {}
+  ~InputsLogLines() {
+    if (f != nullptr) std::fclose(f);
+  }
+  InputsLogLines(const InputsLogLines&) = delete;
+  InputsLogLines& operator=(const InputsLogLines&) = delete;
+
+  std::string_view text() const { return {line.data(), line_len}; }
+
+  // The next line (without '\n', nor a '\r' before it: a CRLF log); false at the end.
+  bool next() {
+    line_len = 0;
+    too_long = false;
+    bool any = false;
+    for (;;) {
+      if (block_pos == block_len) {
+        block_len = std::fread(block.data(), 1, block.size(), f);
+        block_pos = 0;
+        if (block_len == 0) {
+          read_error = std::ferror(f) != 0;
+          if (!any) return false;
+          break;  // a last line without '\n'
+        }
+        bytes += block_len;
+        sha.update(std::string_view(block.data(), block_len));
+      }
+      any = true;
+      const char ch = block[block_pos++];
+      if (ch == '\n') break;
+      if (line_len < line.size()) {
+        line[line_len++] = ch;
+      } else {
+        too_long = true;
+      }
+    }
+    if (!too_long && line_len > 0 && line[line_len - 1] == '\r') --line_len;
     ++line_no;
-    if (!line.empty() && line.back() == '\r') line.pop_back();  // a log saved with CRLF line ends
+    return true;
+  }
+};
+
+bool read_inputs_log(const std::string& path, InputsLog& out, std::vector<std::string>& problems) {
+  InputsLogLines lines(path);
+  if (lines.f == nullptr) {
+    problems.push_back(path + ": cannot open (" + std::string(std::strerror(errno)) + ")");
+    return false;
+  }
+  std::int64_t last_step = 0;
+  bool version = false, commands_seen = false;
+  const auto bad = [&](const std::string& what) {
+    if (problems.size() < 20) problems.push_back(path + ":" + std::to_string(lines.line_no) + ": " + what);
+  };
+  std::string why;
+  InputsLogLine l;
+  while (lines.next()) {
+    if (lines.too_long) {
+      bad("a line longer than " + std::to_string(kMaxInputsLineBytes) + " bytes");
+      continue;
+    }
+    const std::string_view line = lines.text();
     if (line.empty()) continue;
     if (line[0] == '#') {
-      const auto value = [&](const char* key) -> const char* {
-        const std::string k = std::string("# ") + key + " ";
-        return line.rfind(k, 0) == 0 ? line.c_str() + k.size() : nullptr;
+      // "# KEY VALUE" -> VALUE
+      const auto value = [&](std::string_view key) -> std::optional<std::string_view> {
+        if (line.size() < key.size() + 3 || line.substr(0, 2) != "# " || line.substr(2, key.size()) != key ||
+            line[2 + key.size()] != ' ') {
+          return std::nullopt;
+        }
+        return line.substr(key.size() + 3);
       };
       // the header comes first and says each thing once: a later line must not change what
       // the commands above it were read as
-      const auto header = [&](const char* key, std::string& field, const char* v) {
+      const auto header = [&](const char* key, std::string& field, std::string_view v) {
         if (commands_seen) {
           bad(std::string("'# ") + key + "' after the commands: the header comes before them");
         } else if (!field.empty()) {
           bad(std::string("a second '# ") + key + "' line (the first said '" + field + "')");
         } else {
-          field = v;
+          field = std::string(v);
         }
       };
       if (line == "# ehpt inputs log 1") {
         version = true;
-      } else if (const char* v = value("scenario")) {
-        header("scenario", out.scenario_path, v);
-      } else if (const char* v2 = value("set")) {
+      } else if (const auto v = value("scenario")) {
+        header("scenario", out.scenario_path, *v);
+      } else if (const auto v2 = value("set")) {
         if (commands_seen) {
           bad("'# set' after the commands: the header comes before them");
         } else {
-          out.overrides.emplace_back(v2);
+          out.overrides.emplace_back(*v2);
         }
-      } else if (const char* v3 = value("family")) {
-        header("family", out.family, v3);
-      } else if (const char* v4 = value("pacing")) {
-        header("pacing", out.pacing, v4);
+      } else if (const auto v3 = value("family")) {
+        header("family", out.family, *v3);
+      } else if (const auto v4 = value("pacing")) {
+        header("pacing", out.pacing, *v4);
       }
       continue;
     }
     commands_seen = true;
-    std::istringstream f(line);
-    std::string kind;
-    long long step = 0, stamp_step = 0;
-    unsigned sequence = 0;
-    f >> kind >> step >> sequence >> stamp_step;
-    if (f.fail()) {
-      bad("expected FAMILY STEP SEQUENCE STAMP_STEP and numbers");
+    if (!parse_inputs_line(line, l, why)) {
+      bad(why);
       continue;
     }
-    // numbers through strtod: exact for the 17 digits written (and inf/nan are refused)
-    std::vector<double> values;
-    for (std::string tok; f >> tok;) {
-      char* end = nullptr;
-      errno = 0;
-      const double v = std::strtod(tok.c_str(), &end);
-      if (end == tok.c_str() || *end != '\0' || errno == ERANGE || !std::isfinite(v)) {
-        values.clear();
-        bad("'" + tok + "' is not a finite number");
-        break;
-      }
-      values.push_back(v);
-    }
-    if (kind != out.family || (kind != "ev" && kind != "psd")) {
-      bad("a command of family '" + kind + "' (the log's family is '" + out.family + "')");
+    if (l.family != out.family || (l.family != "ev" && l.family != "psd")) {
+      bad("a command of family '" + std::string(l.family.substr(0, 40)) + "' (the log's family is '" + out.family +
+          "')");
       continue;
     }
-    const std::size_t want = kind == "ev" ? 2 : 6;
-    if (values.size() != want || step < last_step || step < 0) {
-      bad(values.size() != want ? "expected " + std::to_string(want + 4) + " fields"
-                                : "step " + std::to_string(step) + " before the previous command's " + std::to_string(last_step));
+    const std::size_t want = l.family == "ev" ? 2 : 6;
+    if (l.n_values != want) {
+      bad("expected " + std::to_string(want + 4) + " fields");
       continue;
     }
-    last_step = step;
-    msgs::Stamp stamp{values[0], stamp_step, sequence};
-    if (kind == "ev") {
-      msgs::EvCommand c;
-      c.stamp = stamp;
-      c.driveTauRef_Nm = values[1];
-      out.ev.push_back({step, c});
-    } else {
-      msgs::PsdCommand c;
-      c.stamp = stamp;
-      c.icePowRef_W = values[1];
-      c.iceTauRef_Nm = values[2];
-      c.genTauRef_Nm = values[3];
-      c.motTauRef_Nm = values[4];
-      if (values[5] != 0.0 && values[5] != 1.0) bad("iceON must be 0 or 1");
-      c.iceON = values[5] != 0.0;
-      out.psd.push_back({step, c});
+    if (l.step < last_step) {
+      bad("step " + std::to_string(l.step) + " before the previous command's " + std::to_string(last_step));
+      continue;
     }
+    if (want == 6 && l.values[5] != 0.0 && l.values[5] != 1.0) bad("iceON must be 0 or 1");
+    last_step = l.step;
+    ++out.commands;
   }
+  if (lines.read_error) problems.push_back(path + ": a read error after " + std::to_string(lines.bytes) + " bytes");
+  out.file = InputFile{path, io::to_hex(lines.sha.finish()), static_cast<std::size_t>(lines.bytes)};
   if (!version) problems.insert(problems.begin(), path + ": not an ehpt inputs log (its first line is not '# ehpt inputs log 1')");
   if (out.scenario_path.empty() || out.family.empty()) {
     problems.push_back(path + ": the header lacks '# scenario' or '# family'");
   }
   return problems.empty();
+}
+
+InputsLogReader::InputsLogReader(const std::string& path, const InputsLog& validated)
+    : path_(path), expected_(validated.file), family_(validated.family), lines_(std::make_unique<InputsLogLines>(path)) {
+  if (lines_->f == nullptr) error_ = path + ": cannot open again (" + std::string(std::strerror(errno)) + ")";
+}
+
+InputsLogReader::~InputsLogReader() = default;
+
+bool InputsLogReader::next_line(InputsLogLine& l) {
+  if (done_ || !error_.empty()) return false;
+  std::string why;
+  const auto changed = [&](const std::string& what) {
+    error_ = path_ + ":" + std::to_string(lines_->line_no) + ": " + what +
+             ": the log changed after it was checked (the replay is not the session's)";
+    return false;
+  };
+  while (lines_->next()) {
+    const std::string_view line = lines_->text();
+    if (lines_->too_long) return changed("a line too long");
+    if (line.empty() || line[0] == '#') continue;
+    if (!parse_inputs_line(line, l, why)) return changed(why);
+    if (l.family != family_ || l.n_values != (family_ == "ev" ? 2u : 6u) || l.step < last_step_) {
+      return changed("a command that does not follow the header and the one before it");
+    }
+    last_step_ = l.step;
+    ++commands_;
+    return true;
+  }
+  done_ = true;
+  const std::string digest = io::to_hex(lines_->sha.finish());
+  if (lines_->read_error || lines_->bytes != expected_.bytes || digest != expected_.sha256) {
+    error_ = path_ + ": its " + std::to_string(lines_->bytes) + " bytes (SHA-256 " + digest +
+             ") are not the ones checked before the run (" + std::to_string(expected_.bytes) +
+             " bytes): the log changed while it was replayed";
+  }
+  return false;
+}
+
+bool InputsLogReader::next(std::int64_t& step, msgs::EvCommand& c) {
+  InputsLogLine l;
+  if (family_ != "ev" || !next_line(l)) return false;
+  step = l.step;
+  c = msgs::EvCommand{};
+  c.stamp = msgs::Stamp{l.values[0], l.stamp_step, l.sequence};
+  c.driveTauRef_Nm = l.values[1];
+  return true;
+}
+
+bool InputsLogReader::next(std::int64_t& step, msgs::PsdCommand& c) {
+  InputsLogLine l;
+  if (family_ != "psd" || !next_line(l)) return false;
+  step = l.step;
+  c = msgs::PsdCommand{};
+  c.stamp = msgs::Stamp{l.values[0], l.stamp_step, l.sequence};
+  c.icePowRef_W = l.values[1];
+  c.iceTauRef_Nm = l.values[2];
+  c.genTauRef_Nm = l.values[3];
+  c.motTauRef_Nm = l.values[4];
+  c.iceON = l.values[5] != 0.0;
+  return true;
 }
 
 }  // namespace ehpt::hil

@@ -17,10 +17,14 @@
 //   ev  STEP SEQ STAMP_STEP STAMP_TIME_S driveTauRef_Nm
 //   psd STEP SEQ STAMP_STEP STAMP_TIME_S icePowRef_W iceTauRef_Nm genTauRef_Nm motTauRef_Nm iceON
 // The run phase appends to a buffer reserved at start-up and writes it when 1 MB is buffered
-// (about every 8 000 commands) and between chunks, as bus.log does.
+// (about every 8 000 commands) and between chunks, as bus.log does. A replay reads it back as
+// a stream: its memory does not grow with the log.
 
+#include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "hil/config/config.hpp"
@@ -31,30 +35,68 @@ namespace ehpt::hil {
 
 inline constexpr const char* kInputsLogName = "inputs.log";
 
-template <class Command>
-struct RecordedCommand {
-  std::int64_t step = 0;  // the command acted from this step on
-  Command command{};
-};
-
 // A command as one line (without the newline) into buf; returns its length. No allocation.
 int format_command(char* buf, std::size_t size, std::int64_t step, const msgs::EvCommand& c);
 int format_command(char* buf, std::size_t size, std::int64_t step, const msgs::PsdCommand& c);
 
-// A whole inputs.log, read at start-up.
+// An inputs.log's header and what a validating read found; the commands stay in the file
+// (a log of a day's session is hundreds of MB: a replay streams it, InputsLogReader).
 struct InputsLog {
   InputFile file;  // its SHA-256 and size (a replay's provenance)
   std::string scenario_path;
   std::vector<std::string> overrides;
   std::string family;  // "ev" or "psd"
   std::string pacing;
-  std::vector<RecordedCommand<msgs::EvCommand>> ev;
-  std::vector<RecordedCommand<msgs::PsdCommand>> psd;
+  std::int64_t commands = 0;
 };
 
-// Reads path; false and "path:line: what" problems if it is not a well-formed log (steps must
-// not decrease; every number finite).
+// Reads path through once, in fixed memory: false and "path:line: what" problems (at most
+// 20) if it is not a well-formed log (steps must not decrease; every number finite; lines at
+// most kMaxInputsLineBytes).
 bool read_inputs_log(const std::string& path, InputsLog& out, std::vector<std::string>& problems);
+
+inline constexpr std::size_t kMaxInputsLineBytes = 8192;
+
+// One command line: FAMILY STEP SEQUENCE STAMP_STEP then the values (2 for ev, 6 for psd).
+struct InputsLogLine {
+  std::string_view family;  // points into the line
+  std::int64_t step = 0, stamp_step = 0;
+  std::uint32_t sequence = 0;
+  std::array<double, 6> values{};
+  std::size_t n_values = 0;
+};
+// Pure; no allocation unless it fails (why: what is wrong, without the file:line).
+bool parse_inputs_line(std::string_view line, InputsLogLine& out, std::string& why);
+
+struct InputsLogLines;  // a file as lines in fixed memory (session_log.cpp)
+
+// The commands of a log read_inputs_log accepted, one at a time, in fixed memory (a 64 KiB
+// block and one line, allocated with the reader). next() is false at the end or on a problem
+// (error() then names file:line); a log that changed since it was validated is such a problem
+// (its bytes or SHA-256 differ at the end).
+class InputsLogReader {
+ public:
+  InputsLogReader(const std::string& path, const InputsLog& validated);
+  ~InputsLogReader();
+  InputsLogReader(const InputsLogReader&) = delete;
+  InputsLogReader& operator=(const InputsLogReader&) = delete;
+
+  bool next(std::int64_t& step, msgs::EvCommand& c);
+  bool next(std::int64_t& step, msgs::PsdCommand& c);
+  const std::string& error() const { return error_; }
+  std::int64_t commands_read() const { return commands_; }
+
+ private:
+  bool next_line(InputsLogLine& l);
+
+  std::string path_;
+  InputFile expected_;
+  std::string family_;
+  std::unique_ptr<InputsLogLines> lines_;  // the file, a block of it and the current line (allocated once)
+  std::int64_t last_step_ = 0, commands_ = 0;
+  bool done_ = false;
+  std::string error_;
+};
 
 // The header lines of a new log.
 std::string inputs_log_header(const std::string& scenario_path, const std::vector<std::string>& overrides,

@@ -247,6 +247,56 @@ class Lockstep(BusTest):
         self.assertEqual((ref / "timeseries.csv").read_bytes(), (self.tmp / "py" / "timeseries.csv").read_bytes())
 
 
+    def test_a_replay_streams_its_log_in_memory_that_does_not_grow_with_it(self):
+        """A recorded lockstep session (EV, 200 s) replayed from its own inputs.log and from a
+        copy whose every command is written 1000 times (550 MB; the replay applies each copy at
+        the same step, so the trajectory is the same): both bit-identical to the session, and
+        the peak resident memory of the big replay within 16 MiB of the small one's (it was a
+        multiple of the log: 3.5 GB for 500 MiB)."""
+        sets = ["solver.duration_s=200"]
+        port = free_port()
+        session = self.tmp / "session"
+        plant = self.plant("ev_nedc", port, session, "--lockstep", "--set", sets[0])
+        ecu = self.ecu("ev_nedc", port, "--set", sets[0])
+        rc, _, err = self.finish(plant)
+        self.assertEqual(rc, 0, err)
+        self.assertEqual(self.finish(ecu)[0], 0)
+        big = self.tmp / "big"  # a session folder of the test's own: the copy with the inflated log
+        big.mkdir()
+        (big / "summary.json").write_bytes((session / "summary.json").read_bytes())
+        lines = (session / "inputs.log").read_text().splitlines(True)
+        commands = [line for line in lines if not line.startswith("#")]
+        self.assertEqual(len(commands), 20001)
+        try:
+            with open(big / "inputs.log", "w") as f:
+                for line in lines:
+                    f.write(line if line.startswith("#") else line * 1000)
+            self.assertGreater((big / "inputs.log").stat().st_size, 500 * 10**6)
+
+            def replay(src, name):
+                with open(self.tmp / (name + ".err"), "w+") as err:
+                    p = subprocess.Popen([EHPT, "replay", str(src), "--out", str(self.tmp / name)],
+                                         stdout=subprocess.DEVNULL, stderr=err, text=True)
+                    _, status, usage = os.wait4(p.pid, 0)
+                    p.returncode = os.waitstatus_to_exitcode(status)
+                    err.seek(0)
+                    return p.returncode, err.read(), usage.ru_maxrss  # KiB
+
+            rc_small, err_small, rss_small = replay(session, "replay_small")
+            rc_big, err_big, rss_big = replay(big, "replay_big")
+        finally:
+            (big / "inputs.log").unlink(missing_ok=True)  # 550 MB of the test's own
+        self.assertEqual(rc_small, 0, err_small)
+        self.assertEqual(rc_big, 0, err_big)
+        for name, n in (("replay_small", 20001), ("replay_big", 20001000)):
+            r = json.loads((self.tmp / name / "summary.json").read_text())["replay"]
+            self.assertEqual((r["commands_recorded"], r["commands_applied"]), (n, n), name)
+            self.assertEqual((self.tmp / name / "timeseries.csv").read_bytes(),
+                             (session / "timeseries.csv").read_bytes(), name)
+        print("\n     replay peak RSS: %.1f MiB for a 0.55 MB log, %.1f MiB for a 550 MB log"
+              % (rss_small / 1024, rss_big / 1024), file=sys.stderr)
+        self.assertLess(rss_big - rss_small, 16 * 1024, (rss_small, rss_big))
+
 class Safety(BusTest):
     def test_a_session_without_its_ecu_is_degraded_not_ok(self):
         """No ECU ever connects: lockstep over the whole of NEDC (118 001 samples) must neither

@@ -1332,6 +1332,15 @@ TEST(CliReplay, ABadLogIsNamedWithItsLineAndNothingRuns) {
   bad(head + "ev 20 0 0 0 1.5\nev 10 1 10 0.01 2\n", 2, dir + "/inputs.log:6: step 10 before the previous command's 20");
   bad(head + "ev 0 0 0 0\n", 2, dir + "/inputs.log:5: expected 6 fields");
   bad(head + "psd 0 0 0 0 1 2 3 4 1\n", 2, "a command of family 'psd' (the log's family is 'ev')");
+  // counts that do not fit their field, and a line no command needs (the reader's buffer)
+  bad(head + "ev 0 4294967296 0 0 1.5\n", 2, dir + "/inputs.log:5: expected FAMILY STEP SEQUENCE STAMP_STEP");
+  bad(head + "ev -10 0 0 0 1.5\n", 2, dir + "/inputs.log:5: expected FAMILY STEP SEQUENCE STAMP_STEP");
+  bad(head + "ev 99999999999999999999 0 0 0 1.5\n", 2, dir + "/inputs.log:5: expected FAMILY STEP SEQUENCE STAMP_STEP");
+  bad(head + "ev 0 0 0 0 1.5 2.5\n", 2, dir + "/inputs.log:5: expected 6 fields");
+  bad(head + "ev 0 0 0 0 1e999\n", 2, dir + "/inputs.log:5: '1e999' is not a finite number");
+  bad(head + "ev 0 0 0 0 " + std::string(9000, '1') + "\nev 10 0 0 0 x\n", 2,
+      dir + "/inputs.log:5: a line longer than 8192 bytes");
+  bad(head + "ev 0 0 0 0 " + std::string(9000, '1') + "\nev 10 0 0 0 x\n", 2, dir + "/inputs.log:6: 'x' is not");
   bad("hello\n", 2, "not an ehpt inputs log");
   bad("# ehpt inputs log 1\n# scenario " + ehpt::test::source_path("scenarios/psecu2_nedc.toml") + "\n# family ev\n", 2,
       "its commands are of family 'ev' but");
