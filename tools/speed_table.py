@@ -6,7 +6,9 @@ usage: tools/speed_table.py BENCH_JSON [PAGE]     (PAGE default: docs/speed.md n
 
 Reads BENCH_JSON (written by `ehpt bench`), builds a Markdown table of every speed figure it
 holds (ns per step, real-time factors, implicit Euler / RK4, wake-up latency next to
-cyclictest's, overruns, peak RSS of the real-time run, RK4 and CVODE wall times) with the
+cyclictest's, overruns, peak RSS of the real-time run, the lockstep exchange's rate and round
+trip with ehpt ecu and a python-can ECU, the python-can ECU's command frames on the wall
+clock, RK4 and CVODE wall times) with the
 commit, date, machine and load average the bench recorded, and writes it into PAGE between
 the lines `<!-- speed-table:begin -->` and `<!-- speed-table:end -->` (everything else in
 PAGE is kept as it is). Every row names the bench.json value it shows, so a reader (and the
@@ -97,6 +99,22 @@ def rows_of(bench):
         target = lat.get("target_peak_rss_MB")
         add("real-time run: peak RSS, MB", "latency.peak_rss_MB", 1,
             f"<= {target:g}" if isinstance(target, (int, float)) else "")
+
+    runs = bench.get("runs", {})
+    for name, label in (("lockstep_socketcand", "lockstep over socketcand, `ehpt ecu` (ev_sort1)"),
+                        ("lockstep_pycan", "lockstep over socketcand, `tools/pycan_ecu.py` (python-can 4.1, psecu2_nedc)")):
+        if at(runs, name + ".status") != "ok":
+            continue
+        add(f"{label}: samples per second", f"runs.{name}.samples_per_s", 0,
+            ">= 2000" if name == "lockstep_pycan" else "")
+        add(f"{label}: round trip p50, us", f"runs.{name}.round_trip_p50_us", 0)
+        add(f"{label}: round trip p99, us", f"runs.{name}.round_trip_p99_us", 0)
+    if at(runs, "wallclock_pycan.status") == "ok":
+        label = "wall clock over socketcand, `tools/pycan_ecu.py` (psecu2_nedc)"
+        add(f"{label}: a sample's two command frames apart, p99, us (as read at 1 ms steps)",
+            "runs.wallclock_pycan.command_frames_spread_p99_us", 0, "<= 1000")
+        add(f"{label}: the same, max, us", "runs.wallclock_pycan.command_frames_spread_max_us", 0)
+        add(f"{label}: stale samples", "runs.wallclock_pycan.stale_samples", 0, "0 on a quiet machine")
 
     cv = bench.get("cvode", {})
     for scenario, run in cv.get("scenarios", {}).items():

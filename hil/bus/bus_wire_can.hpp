@@ -28,6 +28,8 @@
 
 #include "hil/bus/bus_binding.hpp"
 #include "hil/bus/bus_family.hpp"
+#include "hil/run/latency_histogram.hpp"
+#include "hil/run/pacer.hpp"
 #include "io/can/asc_log.hpp"
 #include "io/can/candump_log.hpp"
 #include "io/can/codec.hpp"
@@ -183,10 +185,16 @@ class CanWire {
     io::can::Frame buf[64];
     while (const std::size_t k = bus_.receive(buf)) {
       log_frames(std::span<const io::can::Frame>(buf, k), true);
+      const std::int64_t t_ns = per_sample_ ? clock_.now_ns() : 0;  // when this batch was read
       for (std::size_t i = 0; i < k; ++i) {
+        const bool first = received_mask_ == 0;
         if (!accept(buf[i], now_step, sample_step, max_age_steps)) continue;
+        if (per_sample_ && first && received_mask_ != 0) first_frame_ns_ = t_ns;
         if ((received_mask_ & binding_.complete_mask) != binding_.complete_mask) continue;
-        if (per_sample_) received_mask_ = 0;
+        if (per_sample_) {
+          received_mask_ = 0;
+          command_spread_.record(t_ns - first_frame_ns_);
+        }
         on_command(incoming_);
       }
     }
@@ -283,6 +291,14 @@ class CanWire {
     rej.integer("before_start", before_start_);
     b.object("rejected", rej);
     b.object("messages_received", messages);
+    if (per_sample_) {  // how far apart a sample's command frames came (Nagle made it a period)
+      io::JsonObject spread;
+      spread.number("p50", static_cast<double>(command_spread_.quantile_ns(0.5)) * 1e-3);
+      spread.number("p99", static_cast<double>(command_spread_.quantile_ns(0.99)) * 1e-3);
+      spread.number("max", static_cast<double>(command_spread_.max_ns()) * 1e-3);
+      spread.integer("count", command_spread_.count());
+      b.object("command_frames_spread_us", spread);
+    }
     b.integer("frames_lost", total.lost);
     b.integer("send_dropped", tc.send_dropped);
     b.integer("slow_client_drops", tc.slow_drops);
@@ -464,6 +480,11 @@ class CanWire {
   Binding binding_;
   double step_s_;
   bool per_sample_;        // a command is complete per sample (lockstep, or an echo)
+  // From the first frame of a sample's command to the one that completes it, as read by the
+  // plant (its resolution: how often the plant drains, every step in wall clock).
+  SteadyClock clock_;
+  std::int64_t first_frame_ns_ = 0;
+  LatencyHistogram command_spread_;
   double timeout_s_ = 0.0;  // the longest received message's timeout
   std::vector<TxState> tx_;
   std::vector<RxState> rx_;

@@ -191,6 +191,7 @@ int ehpt::cli::cmd_bench(const std::vector<std::string>& args) {
       {{"lockstep_socketcand", "lockstep, socketcand", "can_codec"}},
       {{"lockstep_pycan", "lockstep, socketcand, python-can ECU (psecu2_nedc)", "exchange"}},
       {{"wallclock_socketcand", "wall clock, socketcand", "wall_clock_session"}},
+      {{"wallclock_pycan", "wall clock, socketcand, python-can ECU (psecu2_nedc)", "wall_clock_pycan"}},
       {{"replay", "its replay (ehpt replay)", "wall_clock_session"}}};
   for (const auto& [name, label, group] : runs) {
     SubRun r;

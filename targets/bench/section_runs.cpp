@@ -203,21 +203,23 @@ bool read_summary(const std::string& dir, std::time_t since, Json& j, std::strin
 }
 
 // A stock python-can 4.1 ECU written the obvious way (tools/pycan_ecu.py: socketcand, two
-// command frames per sample, Nagle left on) driving PSecu2 in lockstep: the rate a user's own
-// python-can ECU gets. Not run where the tool or python3-can is missing (said so, not failed).
-void pycan_run(Bench& b) {
-  SubRun& r = b.run("lockstep_pycan");
+// command frames per sample, Nagle left on) driving PSecu2, in lockstep (the rate a user's own
+// python-can ECU gets) and on the wall clock (how far apart its two frames of a sample come:
+// a period, before the plant ACKed at once). Not run where the tool or python3-can is missing
+// (said so, not failed).
+void pycan_run(Bench& b, const std::string& name, bool lockstep, double seconds) {
+  SubRun& r = b.run(name);
   const std::string tool = ehpt::hil::tools_dir() + "/pycan_ecu.py";
   if (access(tool.c_str(), R_OK) != 0) {
     r.status = "not run: " + tool + " not found";
     return;
   }
-  const Outcome probe = run_child({"/usr/bin/python3", "-c", "import can"}, b.logs, "lockstep_pycan_probe", 30.0);
+  const Outcome probe = run_child({"/usr/bin/python3", "-c", "import can"}, b.logs, name + "_probe", 30.0);
   if (!probe.ok()) {
     r.status = "not run: /usr/bin/python3 cannot import can (apt-get install python3-can)";
     return;
   }
-  socketcand_run(b, "lockstep_pycan", true, b.seconds, "psecu2_nedc", [tool](int port) {
+  socketcand_run(b, name, lockstep, seconds, "psecu2_nedc", [tool](int port) {
     return std::vector<std::string>{"/usr/bin/python3", tool, "--vehicle", "psd", "--interface", "socketcand",
                                     "--host", "127.0.0.1", "--port", std::to_string(port), "--channel", "can0",
                                     "--idle-timeout", "10"};
@@ -228,6 +230,10 @@ void take_summary(Bench& b, SubRun& r, const Json& j) {
   r.samples_per_s = json_num(j, "bus.samples_per_s");
   r.round_trip_p50_us = json_num(j, "bus.round_trip_us.p50");
   r.round_trip_p99_us = json_num(j, "bus.round_trip_us.p99");
+  r.spread_p50_us = json_num(j, "bus.command_frames_spread_us.p50");
+  r.spread_p99_us = json_num(j, "bus.command_frames_spread_us.p99");
+  r.spread_max_us = json_num(j, "bus.command_frames_spread_us.max");
+  r.stale_samples = json_num(j, "bus.stale_samples");
   r.hash = json_str(j, "trajectory_hash");
   // a bus session without its ECU the whole time (the plant runs with --allow-degraded so that
   // its summary is kept): its figures are not the exchange's, so the run did not do its job
@@ -247,14 +253,16 @@ void take_summary(Bench& b, SubRun& r, const Json& j) {
 void section_runs(Bench& b) {
   b.progress("(d, e) determinism and allocations: " + std::string(kRtScenario) + ", " + std::to_string(b.seconds) +
              " s as fast as possible (x3), lockstep over socketcand (ehpt ecu, and a python-can ECU on psecu2_nedc) and LCM; a " + fmt("%.0f", b.wall_clock_s) +
-             " s wall-clock session over socketcand and its replay (about " + fmt("%.0f", b.wall_clock_s + 5.0) + " s)");
+             " s wall-clock session over socketcand (ehpt ecu, and the python-can ECU) and its replay (about " +
+             fmt("%.0f", 2.0 * b.wall_clock_s + 5.0) + " s)");
   batch_run(b, "batch_1", {});
   if (!stopping()) batch_run(b, "batch_2", {});
   if (!stopping()) batch_run(b, "batch_can", {"--set", "vehicle.ecu.codec=can"});
   if (!stopping()) socketcand_run(b, "lockstep_socketcand", true, b.seconds);
-  if (!stopping()) pycan_run(b);
+  if (!stopping()) pycan_run(b, "lockstep_pycan", true, b.seconds);
   if (!stopping()) lcm_run(b);
   if (!stopping()) socketcand_run(b, "wallclock_socketcand", false, b.wall_clock_s);
+  if (!stopping()) pycan_run(b, "wallclock_pycan", false, b.wall_clock_s);
   if (!stopping()) replay_run(b);
 }
 
