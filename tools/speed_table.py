@@ -8,7 +8,7 @@ Reads BENCH_JSON (written by `ehpt bench`), builds a Markdown table of every spe
 holds (ns per step, real-time factors, implicit Euler / RK4, wake-up latency next to
 cyclictest's, overruns, peak RSS of the real-time run, the lockstep exchange's rate and round
 trip with ehpt ecu and a python-can ECU, the python-can ECU's command frames on the wall
-clock, RK4 and CVODE wall times) with the
+clock, the own-DBC VCU's stale samples on the wall clock and in real time, RK4 and CVODE wall times) with the
 commit, date, machine and load average the bench recorded, and writes it into PAGE between
 the lines `<!-- speed-table:begin -->` and `<!-- speed-table:end -->` (everything else in
 PAGE is kept as it is). Every row names the bench.json value it shows, so a reader (and the
@@ -115,6 +115,11 @@ def rows_of(bench):
             "runs.wallclock_pycan.command_frames_spread_p99_us", 0, "<= 1000")
         add(f"{label}: the same, max, us", "runs.wallclock_pycan.command_frames_spread_max_us", 0)
         add(f"{label}: stale samples", "runs.wallclock_pycan.stale_samples", 0, "0 on a quiet machine")
+    for name, label in (("wallclock_own_dbc", "wall clock"), ("realtime_own_dbc", "real time (SCHED_FIFO)")):
+        if at(runs, name + ".status") == "ok":
+            add(f"`examples/own_dbc/vcu_ecu.py` (own DBC, E2E, no echo), {label}: stale samples",
+                f"runs.{name}.stale_samples", 0, "0 on a quiet machine")
+            add(f"`examples/own_dbc/vcu_ecu.py`, {label}: timeouts", f"runs.{name}.timeouts", 0, "0")
 
     cv = bench.get("cvode", {})
     for scenario, run in cv.get("scenarios", {}).items():

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // `ehpt bench`: the timing and determinism suite (targets/bench/bench.hpp). Everything it runs
-// outside its own process is this binary (/proc/self/exe) or cyclictest, started with an
+// outside its own process is this binary (/proc/self/exe), cyclictest or a python-can ECU of
+// the source tree (tools/pycan_ecu.py, examples/own_dbc/vcu_ecu.py), started with an
 // argument vector (never a shell), in a process group of its own, waited for with a
 // deadline and ended (SIGINT, then SIGKILL) on a timeout or a stop signal.
 //
@@ -13,6 +14,10 @@
 //   lockstep_socketcand       ehpt plant --lockstep + ehpt ecu over socketcand on 127.0.0.1
 //   lockstep_lcm              the same over LCM udpm in a private network namespace
 //   wallclock_socketcand      ehpt plant (wall clock) + ehpt ecu over socketcand
+//   lockstep_pycan            ehpt plant --lockstep + tools/pycan_ecu.py (python-can), PSecu2
+//   wallclock_pycan           the same on the wall clock
+//   wallclock_own_dbc         ehpt plant --bus-map + examples/own_dbc/vcu_ecu.py, wall clock
+//   realtime_own_dbc          the same in the real-time loop
 //   replay                    ehpt replay of wallclock_socketcand (when the build has it)
 // The folder is made fresh, or must be empty or an earlier bench (bench.json with our format
 // line and nothing but the names above); the run folders inside follow ehpt's own rules.
@@ -45,6 +50,10 @@ const char* const ehpt::cli::kBenchHelp =
     "  (e) the trajectory hash across pacers: as fast as possible (twice), real time, lockstep\n"
     "      over socketcand and over LCM udpm (in a private network namespace), and the replay\n"
     "      of a wall-clock session ('ehpt replay', when this build has it)\n"
+    "  the bus exchange: lockstep rate and round trip with 'ehpt ecu' and a stock python-can\n"
+    "      ECU (tools/pycan_ecu.py); on the wall clock how far apart its two command frames of a\n"
+    "      sample came; the own-DBC VCU (examples/own_dbc) on the wall clock and in real time:\n"
+    "      stale samples and timeouts (python3-can, python3-canmatrix; said so when missing)\n"
     "  (f) RK4 at 1 ms against the CVODE reference (BDF, rtol 1e-8): final SOC, fuel and\n"
     "      distance differences, wall-time ratio\n"
     "  --quick          a short version (under a minute): one repetition, 5 s of real time,\n"
@@ -192,6 +201,8 @@ int ehpt::cli::cmd_bench(const std::vector<std::string>& args) {
       {{"lockstep_pycan", "lockstep, socketcand, python-can ECU (psecu2_nedc)", "exchange"}},
       {{"wallclock_socketcand", "wall clock, socketcand", "wall_clock_session"}},
       {{"wallclock_pycan", "wall clock, socketcand, python-can ECU (psecu2_nedc)", "wall_clock_pycan"}},
+      {{"wallclock_own_dbc", "wall clock, socketcand, own-DBC VCU (psecu2_nedc)", "own_dbc_wall_clock"}},
+      {{"realtime_own_dbc", "real time, socketcand, own-DBC VCU (psecu2_nedc)", "own_dbc_realtime"}},
       {{"replay", "its replay (ehpt replay)", "wall_clock_session"}}};
   for (const auto& [name, label, group] : runs) {
     SubRun r;

@@ -104,6 +104,6 @@ inline constexpr const char* kBenchFormat = "ehpt bench, version 1";
 // still for its first 11 s, so a 5 s run would compare trajectories of a car at rest).
 inline constexpr const char* kRtScenario = "ev_sort1";
 inline const std::vector<std::string> kRunDirs = {"batch_1",  "batch_2", "batch_can", "realtime", "lockstep_socketcand", "lockstep_pycan",
-                                           "lockstep_lcm", "wallclock_socketcand", "wallclock_pycan", "replay"};
+                                           "lockstep_lcm", "wallclock_socketcand", "wallclock_pycan", "wallclock_own_dbc", "realtime_own_dbc", "replay"};
 
 }  // namespace ehpt::bench

@@ -198,6 +198,24 @@ std::string report_text(const Bench& b) {
   }
   s += table({"ECU", "spread p50 us", "p99 us", "max us", "stale samples", "target (p99)", ""}, rows, "lrrrrrl");
 
+  // the VCU of its own DBC (no echo): does it keep up on the wall clock and in real time
+  s += "\n    examples/own_dbc/vcu_ecu.py (its own DBC, E2E, no echo) bound to psecu2_nedc, " + fmt("%.0f", b.wall_clock_s) +
+       " s: samples the VCU left without a fresh command, and timeouts\n";
+  rows.clear();
+  for (const auto& [name, label] : std::vector<std::pair<std::string, std::string>>{
+           {"wallclock_own_dbc", "wall clock"}, {"realtime_own_dbc", "real time (SCHED_FIFO)"}}) {
+    for (const auto& r : b.runs) {
+      if (r.name != name) continue;
+      if (!r.ok()) {
+        rows.push_back({label, "-", "-", "0 on a quiet machine", r.status});
+      } else {
+        rows.push_back({label, fmt("%.0f", r.stale_samples), fmt("%.0f", r.timeouts), "0 on a quiet machine",
+                        target_mark(r.stale_samples == 0.0 && r.timeouts == 0.0)});
+      }
+    }
+  }
+  s += table({"pacing", "stale samples", "timeouts", "target", ""}, rows, "lrrll");
+
   // (e)
   s += "\n(e) determinism: " + std::string(kRtScenario) + ", " + std::to_string(b.seconds) + " s (the wall-clock session " +
        fmt("%.0f", b.wall_clock_s) + " s); trajectory_hash: FNV-1a over every recorded value\n";
@@ -272,6 +290,7 @@ ehpt::io::JsonObject run_json(const SubRun& r) {
       j.number("command_frames_spread_max_us", r.spread_max_us);
     }
     if (std::isfinite(r.stale_samples)) j.number("stale_samples", r.stale_samples);
+    if (std::isfinite(r.timeouts)) j.number("timeouts", r.timeouts);
   }
   j.number("wall_time_s", r.wall_s);
   return j;

@@ -38,7 +38,7 @@ using EcuArgv = std::function<std::vector<std::string>(int port)>;
 // ehpt plant + an ECU over socketcand on 127.0.0.1 (lockstep, or the wall clock): by default
 // ehpt ecu on the scenario of (d) and (e).
 void socketcand_run(Bench& b, const std::string& name, bool lockstep, double seconds, const char* scenario = kRtScenario,
-                    const EcuArgv& ecu_argv = nullptr) {
+                    const EcuArgv& ecu_argv = nullptr, const std::vector<std::string>& plant_extra = {}) {
   SubRun& r = b.run(name);
   const auto t0 = Clock::now();
   for (int attempt = 0; attempt < 3 && !stopping(); ++attempt) {
@@ -48,6 +48,7 @@ void socketcand_run(Bench& b, const std::string& name, bool lockstep, double sec
     std::vector<std::string> plant = {b.exe, "plant", scenario, "--bus", bus, "--out", b.dir + "/" + name, "--quiet",
                                       "--ecu-wait-s", "30", "--allow-degraded"};
     if (lockstep) plant.push_back("--lockstep");
+    plant.insert(plant.end(), plant_extra.begin(), plant_extra.end());
     std::vector<std::string> ecu = ecu_argv ? ecu_argv(port)
                                             : std::vector<std::string>{b.exe, "ecu", scenario, "--bus", bus, "--quiet",
                                                                        "--idle-timeout-s", "10"};
@@ -226,6 +227,55 @@ void pycan_run(Bench& b, const std::string& name, bool lockstep, double seconds)
   });
 }
 
+// The VCU that knows only its own DBC (examples/own_dbc/vcu_ecu.py, python-can + canmatrix,
+// E2E on its torques, no echo) answering PSecu2 through its binding, on the wall clock or in
+// the real-time loop: whether it keeps up (stale samples, timeouts) on this machine. Its
+// calibration is the scenario's, written by the Python module of this build (or the installed
+// one). Not run where the example, canmatrix or the module is missing (said so).
+void own_dbc_run(Bench& b, const std::string& name, bool realtime) {
+  SubRun& r = b.run(name);
+  const std::string tools = ehpt::hil::tools_dir();
+  std::string folder;
+  for (const std::string& candidate : {tools + "/../examples/own_dbc", tools + "/../../share/doc/ehpt/examples/own_dbc"}) {
+    if (access((candidate + "/vcu_ecu.py").c_str(), R_OK) == 0) {
+      folder = candidate;
+      break;
+    }
+  }
+  if (folder.empty()) {
+    r.status = "not run: examples/own_dbc/vcu_ecu.py not found beside " + tools;
+    return;
+  }
+  const std::string module_dir = b.exe.substr(0, b.exe.rfind('/') + 1) + "python";
+  const std::string cal = b.dir + "/" + name + "_calibration.json";
+  const Outcome o = run_child({"/usr/bin/python3", "-c",
+                               "import sys, json; sys.path.insert(0, sys.argv[1]); import canmatrix, can, ehpt; "
+                               "json.dump(dict(ehpt.Simulation('psecu2_nedc', external_ecu=True).ecu_parameters), "
+                               "open(sys.argv[2], 'w'))",
+                               module_dir, cal},
+                              b.logs, name + "_calibration", 60.0);
+  if (!o.ok()) {
+    r.status = "not run: /usr/bin/python3 cannot import canmatrix, can and ehpt (python3-canmatrix, python3-can, the "
+               "module of this build)";
+    return;
+  }
+  std::vector<std::string> plant_extra = {"--bus-map", folder + "/vcu.binding.toml"};
+  if (realtime) {
+    for (const std::string& a : {std::string("--realtime"), std::string("--cpu"), std::to_string(b.cpu),
+                                 std::string("--priority"), std::to_string(b.opt.priority)}) {
+      plant_extra.push_back(a);
+    }
+  }
+  const std::string vcu = folder + "/vcu_ecu.py";
+  socketcand_run(
+      b, name, false, b.wall_clock_s, "psecu2_nedc",
+      [vcu, cal](int port) {
+        return std::vector<std::string>{"/usr/bin/python3", vcu, "--port", std::to_string(port), "--calibration", cal,
+                                        "--idle-timeout-s", "10"};
+      },
+      plant_extra);
+}
+
 void take_summary(Bench& b, SubRun& r, const Json& j) {
   r.samples_per_s = json_num(j, "bus.samples_per_s");
   r.round_trip_p50_us = json_num(j, "bus.round_trip_us.p50");
@@ -234,6 +284,7 @@ void take_summary(Bench& b, SubRun& r, const Json& j) {
   r.spread_p99_us = json_num(j, "bus.command_frames_spread_us.p99");
   r.spread_max_us = json_num(j, "bus.command_frames_spread_us.max");
   r.stale_samples = json_num(j, "bus.stale_samples");
+  r.timeouts = json_num(j, "bus.timeouts");
   r.hash = json_str(j, "trajectory_hash");
   // a bus session without its ECU the whole time (the plant runs with --allow-degraded so that
   // its summary is kept): its figures are not the exchange's, so the run did not do its job
@@ -253,8 +304,8 @@ void take_summary(Bench& b, SubRun& r, const Json& j) {
 void section_runs(Bench& b) {
   b.progress("(d, e) determinism and allocations: " + std::string(kRtScenario) + ", " + std::to_string(b.seconds) +
              " s as fast as possible (x3), lockstep over socketcand (ehpt ecu, and a python-can ECU on psecu2_nedc) and LCM; a " + fmt("%.0f", b.wall_clock_s) +
-             " s wall-clock session over socketcand (ehpt ecu, and the python-can ECU) and its replay (about " +
-             fmt("%.0f", 2.0 * b.wall_clock_s + 5.0) + " s)");
+             " s wall-clock session over socketcand (ehpt ecu, and the python-can ECU) and its replay, the own-DBC VCU on "
+             "the wall clock and in real time (about " + fmt("%.0f", 4.0 * b.wall_clock_s + 10.0) + " s)");
   batch_run(b, "batch_1", {});
   if (!stopping()) batch_run(b, "batch_2", {});
   if (!stopping()) batch_run(b, "batch_can", {"--set", "vehicle.ecu.codec=can"});
@@ -263,6 +314,8 @@ void section_runs(Bench& b) {
   if (!stopping()) lcm_run(b);
   if (!stopping()) socketcand_run(b, "wallclock_socketcand", false, b.wall_clock_s);
   if (!stopping()) pycan_run(b, "wallclock_pycan", false, b.wall_clock_s);
+  if (!stopping()) own_dbc_run(b, "wallclock_own_dbc", false);
+  if (!stopping()) own_dbc_run(b, "realtime_own_dbc", true);
   if (!stopping()) replay_run(b);
 }
 

@@ -52,7 +52,7 @@ struct SubRun {
   double samples_per_s = NAN, round_trip_p50_us = NAN, round_trip_p99_us = NAN;
   // bus runs whose commands come per sample: how far apart a sample's command frames came
   // (bus.command_frames_spread_us), and the samples the ECU left without a fresh command
-  double spread_p50_us = NAN, spread_p99_us = NAN, spread_max_us = NAN, stale_samples = NAN;
+  double spread_p50_us = NAN, spread_p99_us = NAN, spread_max_us = NAN, stale_samples = NAN, timeouts = NAN;
   bool ok() const { return status == "ok"; }
   bool failed() const { return status.rfind("failed", 0) == 0; }
 };
