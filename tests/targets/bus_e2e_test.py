@@ -579,17 +579,43 @@ class Lcm(BusTest):
 
 
 class Vcan(BusTest):
+    def own_dbc_calibration(self):
+        """MBecu2's calibration for examples/own_dbc/vcu_ecu.py, from this build's Python module."""
+        cal = self.tmp / "vcu_calibration.json"
+        r = subprocess.run(["/usr/bin/python3", "-c", "import sys, json; sys.path.insert(0, sys.argv[1]); import ehpt; "
+                            "json.dump(dict(ehpt.Simulation('psecu2_nedc', external_ecu=True).ecu_parameters), "
+                            "open(sys.argv[2], 'w'))", str(pathlib.Path(EHPT).parent / "python"), str(cal)],
+                           capture_output=True, text=True, timeout=60)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        return cal
+
+    def own_dbc_on_socketcand(self, cal, duration, out):
+        """The same VCU and binding over socketcand on the host: the reference of the vcan run."""
+        port = free_port()
+        plant = self.plant("psecu2_nedc", port, out, "--lockstep", "--bus-map",
+                           str(SOURCE / "examples" / "own_dbc" / "vcu.binding.toml"), "--set", "solver.duration_s=" + duration)
+        vcu = start(["/usr/bin/python3", str(SOURCE / "examples" / "own_dbc" / "vcu_ecu.py"), "--port", str(port),
+                     "--calibration", str(cal), "--idle-timeout-s", "3"], self.tmp)
+        self.procs.append(vcu)
+        rc, _, err = self.finish(plant)
+        self.assertEqual(rc, 0, err)
+        self.finish(vcu, 60)
+
     def test_plant_on_a_real_vcan0_with_ehpt_ecu_and_python_can(self):
         """Inside tools/vcan-vm.sh (a qemu guest with vcan0): ehpt plant on SocketCAN in lockstep
         with ehpt ecu, then with the python-can example (interface socketcan). Both runs equal
-        the in-process follower through the codec, byte for byte, and their bus.log decodes."""
+        the in-process follower through the codec, byte for byte, and their bus.log decodes.
+        Then the VCU of its own DBC (two extended ids, Motorola, a multiplexed message, E2E)
+        through its binding on PSecu2: equal, byte for byte, to the same session over socketcand
+        (which own_dbc_ecu shows equal to the VCU run in process), every 29-bit frame taken."""
         duration = "10"
         ref = self.reference("ev_nedc", ["solver.duration_s=" + duration], "ref")
+        cal = self.own_dbc_calibration()
         out = self.tmp / "vm"
         out.mkdir()
         r = subprocess.run([str(SOURCE / "tools" / "vcan-vm.sh"), "--timeout", "900", "--out", str(out), "--",
                             "/bin/sh", str(SOURCE / "tests" / "targets" / "vcan_guest.sh"), EHPT, str(out),
-                            str(SOURCE), duration], capture_output=True, text=True, timeout=1000)
+                            str(SOURCE), duration, str(cal)], capture_output=True, text=True, timeout=1000)
         if r.returncode == 77:
             print("skipped: " + r.stderr.strip(), file=sys.stderr)
             os._exit(77)
@@ -608,6 +634,27 @@ class Vcan(BusTest):
             requests = [DBC.decode(i, d)[1]["driverRequest_Nm"] for _, i, d in frames if i == 0x220]
             self.assertEqual(torques[-1000:], requests[-1000:])  # the follower passes the request on
         self.assertIn("1001 samples answered", (out / "pycan.txt").read_text())
+        # the own-DBC VCU on vcan0 == over socketcand
+        host = self.tmp / "own_dbc_socketcand"
+        self.own_dbc_on_socketcand(cal, duration, host)
+        vm_run = out / "with_own_dbc_vcu"
+        self.assertEqual((host / "timeseries.csv").read_bytes(), (vm_run / "timeseries.csv").read_bytes(),
+                         (out / "own_dbc.txt").read_text()[-2000:])
+        summary = json.loads((vm_run / "summary.json").read_text())
+        bus = summary["bus"]
+        self.assertEqual(summary["status"], "ok")
+        self.assertEqual(bus["transport"], "socketcan:vcan0")
+        samples = int(duration) * 100 + 1
+        self.assertEqual(bus["commands_applied"], samples)
+        self.assertEqual(sum(bus["rejected"].values()), 0, bus["rejected"])
+        # the VCU's E2E-protected torque frames and its multiplexed engine frames (a 29-bit id), each taken
+        self.assertEqual(bus["messages_received"]["VCU_TorqueCmd"]["accepted"], samples)
+        self.assertEqual(bus["messages_received"]["VCU_TorqueCmd"]["bad_crc"], 0)
+        self.assertEqual(bus["messages_received"]["VCU_EngineCmd"]["accepted"], 2 * samples)
+        # bus.log: the 29-bit frames as candump writes them (8 hex digits): the plant's HIL_Powertrain
+        # and the VCU's two engine frames per sample
+        ext = [line for line in (vm_run / "bus.log").read_text().splitlines() if line.split()[2].find("#") == 8]
+        self.assertGreaterEqual(len(ext), 3 * samples, "extended-id frames in bus.log")
 
 
 class BadInput(BusTest):

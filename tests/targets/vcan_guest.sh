@@ -1,10 +1,12 @@
 #!/bin/sh
 # SPDX-License-Identifier: BSD-3-Clause
 # Runs inside tools/vcan-vm.sh (a qemu guest with a real vcan0): ehpt plant on vcan0 in
-# lockstep with (a) ehpt ecu and (b) the python-can example ECU (interface socketcan).
-# usage: vcan_guest.sh EHPT OUT_DIR SOURCE_DIR DURATION_S
+# lockstep with (a) ehpt ecu, (b) the python-can example ECU (interface socketcan) and, given
+# a calibration, (c) the VCU that knows only its own DBC (examples/own_dbc: extended ids,
+# Motorola, multiplexing, E2E) through its binding, on PSecu2.
+# usage: vcan_guest.sh EHPT OUT_DIR SOURCE_DIR DURATION_S [VCU_CALIBRATION_JSON]
 set -eu
-ehpt=$1 out=$2 src=$3 duration=$4
+ehpt=$1 out=$2 src=$3 duration=$4 calibration=${5:-}
 # the plant sends sample 0 again every second until an ECU answers, so the order of start
 # does not matter (python-can takes seconds to import under qemu's emulation)
 "$ehpt" ecu ev_nedc --bus socketcan:vcan0 --set solver.duration_s="$duration" --idle-timeout-s 5 \
@@ -19,3 +21,11 @@ py=$!
 "$ehpt" plant ev_nedc --bus socketcan:vcan0 --lockstep --out "$out/with_pycan_ecu" \
   --set solver.duration_s="$duration" --quiet
 wait $py
+if [ -n "$calibration" ]; then
+  /usr/bin/python3 "$src/examples/own_dbc/vcu_ecu.py" --interface socketcan --channel vcan0 \
+    --calibration "$calibration" --idle-timeout-s 10 > "$out/own_dbc.txt" 2>&1 &
+  vcu=$!
+  "$ehpt" plant psecu2_nedc --bus socketcan:vcan0 --bus-map "$src/examples/own_dbc/vcu.binding.toml" --lockstep \
+    --out "$out/with_own_dbc_vcu" --set solver.duration_s="$duration" --quiet
+  wait $vcu
+fi
