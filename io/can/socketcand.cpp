@@ -347,8 +347,10 @@ class Server final : public Transport {
     close_in_order(open);
   }
 
+  // Queues the frame for every live client and writes what it can without waiting. It reads
+  // nothing and accepts no one: receive() and wait() do that, once per call, not per frame
+  // (a sample is seven frames).
   bool send(const Frame& f) override {
-    pump();
     char buf[96];
     const std::size_t n = format_frame(buf, sizeof buf, f, wall_time_s());
     const std::int64_t now = now_ns();
