@@ -277,9 +277,16 @@ bool InputsLogReader::next_line(InputsLogLine& l) {
     return true;
   }
   done_ = true;
-  const std::string digest = io::to_hex(lines_->sha.finish());
+  // compared without allocating (the end of the log may come inside the run's loop)
+  const std::array<std::uint8_t, 32> d = lines_->sha.finish();
+  std::array<char, 64> hex{};
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    hex[2 * i] = "0123456789abcdef"[d[i] >> 4];
+    hex[2 * i + 1] = "0123456789abcdef"[d[i] & 0xF];
+  }
+  const std::string_view digest(hex.data(), hex.size());
   if (lines_->read_error || lines_->bytes != expected_.bytes || digest != expected_.sha256) {
-    error_ = path_ + ": its " + std::to_string(lines_->bytes) + " bytes (SHA-256 " + digest +
+    error_ = path_ + ": its " + std::to_string(lines_->bytes) + " bytes (SHA-256 " + std::string(digest) +
              ") are not the ones checked before the run (" + std::to_string(expected_.bytes) +
              " bytes): the log changed while it was replayed";
   }

@@ -289,8 +289,11 @@ class Lockstep(BusTest):
         self.assertEqual(rc_small, 0, err_small)
         self.assertEqual(rc_big, 0, err_big)
         for name, n in (("replay_small", 20001), ("replay_big", 20001000)):
-            r = json.loads((self.tmp / name / "summary.json").read_text())["replay"]
+            summary = json.loads((self.tmp / name / "summary.json").read_text())
+            r = summary["replay"]
             self.assertEqual((r["commands_recorded"], r["commands_applied"]), (n, n), name)
+            # the log read in the loop: no allocation there, the end of the log's digest check too
+            self.assertEqual(summary["heap_allocations_after_startup"], 0, name)
             self.assertEqual((self.tmp / name / "timeseries.csv").read_bytes(),
                              (session / "timeseries.csv").read_bytes(), name)
         print("\n     replay peak RSS: %.1f MiB for a 0.55 MB log, %.1f MiB for a 550 MB log"
