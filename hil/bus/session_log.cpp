@@ -1,6 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "hil/bus/session_log.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -119,7 +123,22 @@ struct InputsLogLines {
   io::Sha256 sha;
   bool read_error = false;
 
-  explicit InputsLogLines(const std::string& path) : f(std::fopen(path.c_str(), "rb")) {}
+  std::string open_error;  // why f is null
+
+  // A regular file only, opened without blocking (a FIFO with no writer would hang the replay
+  // here), as io/text_file.cpp opens input files.
+  explicit InputsLogLines(const std::string& path) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
+    struct stat st {};
+    if (fd < 0) {
+      open_error = errno == ENOENT ? "no such file" : std::strerror(errno);
+    } else if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+      open_error = "not a regular file";
+    } else if ((f = ::fdopen(fd, "rb")) == nullptr) {
+      open_error = std::strerror(errno);
+    }
+    if (f == nullptr && fd >= 0) ::close(fd);
+  }
   ~InputsLogLines() {
     if (f != nullptr) std::fclose(f);
   }
@@ -163,7 +182,7 @@ struct InputsLogLines {
 bool read_inputs_log(const std::string& path, InputsLog& out, std::vector<std::string>& problems) {
   InputsLogLines lines(path);
   if (lines.f == nullptr) {
-    problems.push_back(path + ": cannot open (" + std::string(std::strerror(errno)) + ")");
+    problems.push_back(path + ": cannot read (" + lines.open_error + ")");
     return false;
   }
   std::int64_t last_step = 0;
@@ -251,7 +270,7 @@ bool read_inputs_log(const std::string& path, InputsLog& out, std::vector<std::s
 
 InputsLogReader::InputsLogReader(const std::string& path, const InputsLog& validated)
     : path_(path), expected_(validated.file), family_(validated.family), lines_(std::make_unique<InputsLogLines>(path)) {
-  if (lines_->f == nullptr) error_ = path + ": cannot open again (" + std::string(std::strerror(errno)) + ")";
+  if (lines_->f == nullptr) error_ = path + ": cannot open again (" + lines_->open_error + ")";
 }
 
 InputsLogReader::~InputsLogReader() = default;

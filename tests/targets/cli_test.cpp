@@ -1361,6 +1361,13 @@ TEST(CliReplay, ABadLogIsNamedWithItsLineAndNothingRuns) {
   const Result ran = ehpt_argv({"replay", dir, "--out", (root / "crlf").string()});
   EXPECT_EQ(ran.exit_code, 1) << ran.err;  // it ran: the hash differs from the dummy summary's
   EXPECT_HAS(ran.out, "DIFFERS from the session");
+  // a FIFO in its place (no writer): refused at once, never waited on
+  fs::remove(dir + "/inputs.log");
+  ASSERT_EQ(::mkfifo((dir + "/inputs.log").c_str(), 0600), 0);
+  const Result fifo = ehpt_argv({"replay", dir, "--out", (root / "never").string()});
+  EXPECT_EQ(fifo.exit_code, 2) << fifo.err;
+  EXPECT_HAS(fifo.err, dir + "/inputs.log: cannot read (not a regular file)");
+  EXPECT_FALSE(fs::exists(root / "never"));
   fs::remove(dir + "/inputs.log");
   const Result r = ehpt_argv({"replay", dir});
   EXPECT_EQ(r.exit_code, 2);
