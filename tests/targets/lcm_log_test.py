@@ -288,18 +288,29 @@ def test_main(ehpt, tool, example):
     # 2c. two plants on one URL and prefix, one example ECU that answers every sample it hears
     # naming its plant's session: each plant takes only its own commands (the other plant's are
     # counted as foreign), so each equals its own `ehpt run`; and each says the bus was shared
-    two = {}
-    ecu = start([example, "--url", URL, "--idle-timeout-s", "2"], tmp, "two_plants_ecu")
-    time.sleep(0.3)
-    for scenario in ("ev_nedc", "ev_sort1"):
-        two[scenario] = start([ehpt, "plant", scenario, "--bus", "lcm:" + URL, "--lockstep", "--quiet", "--out",
-                               str(tmp / ("two_" + scenario))] + long_sets, tmp, "two_plants_" + scenario)
-    for scenario, p in two.items():
-        rc, _, err = finish(p)
+    # UDP multicast on a loaded host can lose a message (measured in CI: one lockstep wait of
+    # ev_sort1 timed out, its sample then in the safe state): such a session is run again, said so
+    for attempt in range(1, 4):
+        two, results = {}, {}
+        ecu = start([example, "--url", URL, "--idle-timeout-s", "2"], tmp, "two_plants_ecu_%d" % attempt)
+        time.sleep(0.3)
+        for scenario in ("ev_nedc", "ev_sort1"):
+            two[scenario] = start([ehpt, "plant", scenario, "--bus", "lcm:" + URL, "--lockstep", "--quiet", "--out",
+                                   str(tmp / ("two_%s_%d" % (scenario, attempt)))] + long_sets, tmp,
+                                  "two_plants_%s_%d" % (scenario, attempt))
+        for scenario, p in two.items():
+            results[scenario] = finish(p)
+        finish(ecu)
+        lost = [sc for sc, (_, _, err) in results.items() if "lockstep wait" in err]
+        if not lost or attempt == 3:
+            break
+        print("     two plants on one URL: a lockstep wait of %s timed out (a multicast message lost): run again"
+              % ", ".join(lost))
+    for scenario, (rc, _, err) in results.items():
         ref = tmp / ("two_ref_" + scenario)
         subprocess.run([ehpt, "run", scenario, "--quiet", "--out", str(ref)] + long_sets, capture_output=True,
                        timeout=120)
-        out = tmp / ("two_" + scenario)
+        out = tmp / ("two_%s_%d" % (scenario, attempt))
         bus = json.loads((out / "summary.json").read_text())["bus"] if (out / "summary.json").exists() else {}
         foreign = bus.get("rejected", {}).get("foreign", 0)
         check(rc == 4 and "commands named another plant session on this URL and prefix" in err,
@@ -310,7 +321,6 @@ def test_main(ehpt, tool, example):
               % (scenario, bus.get("commands_applied", 0), foreign))
         check((ref / "timeseries.csv").read_bytes() == (out / "timeseries.csv").read_bytes(),
               "two plants on one URL: %s's timeseries == its own ehpt run's (byte for byte)" % scenario)
-    finish(ecu)
 
     # 3. the checker refuses what it must
     checker_rejects(tool, log, tmp)
