@@ -40,7 +40,8 @@ bool wants_help(const std::vector<std::string>& args) {
   return false;
 }
 
-int load(const std::string& name, const std::vector<std::string>& sets, ehpt::hil::Scenario& sc) {
+int load(const std::string& name, const std::vector<std::string>& sets, ehpt::hil::Scenario& sc,
+         const std::vector<std::string>& faults) {
   std::string reason;
   const std::string path = ehpt::hil::resolve_scenario(name, reason);
   if (path.empty()) {
@@ -50,7 +51,7 @@ int load(const std::string& name, const std::vector<std::string>& sets, ehpt::hi
     return 2;
   }
   std::vector<std::string> errors;
-  if (!ehpt::hil::load_scenario(path, sets, sc, errors)) {
+  if (!ehpt::hil::load_scenario(path, sets, faults, sc, errors)) {
     for (const auto& e : errors) std::cerr << e << "\n";
     std::cerr << errors.size() << (errors.size() == 1 ? " problem" : " problems") << "; nothing was run.\n";
     return 2;

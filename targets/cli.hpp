@@ -5,6 +5,7 @@
 // entry points (one file each: targets/cmd_*.cpp, targets/bench/, dispatched by
 // targets/ehpt_main.cpp). Exit codes: 0 ok, 1 usage / output / system error, 2 bad input
 // (nothing was run), 3 run-time fault (outputs kept), 4 degraded bus session (outputs kept),
+// 5 an expectation of the scenario failed (ehpt run; outputs kept),
 // 128 + N stopped by signal N.
 
 #include <atomic>
@@ -29,7 +30,9 @@ bool wants_help(const std::vector<std::string>& args);
 
 // Resolves a scenario name or path and loads it with the --set overrides. 0, or 2 with every
 // problem on stderr (nothing is run).
-int load(const std::string& name, const std::vector<std::string>& sets, ehpt::hil::Scenario& sc);
+// faults: --fault texts ("kind=stuck target=batSOC at_s=10").
+int load(const std::string& name, const std::vector<std::string>& sets, ehpt::hil::Scenario& sc,
+         const std::vector<std::string>& faults = {});
 
 // The real-time options of 'ehpt run' and 'ehpt plant'.
 struct RealtimeArgs {
@@ -58,5 +61,6 @@ int cmd_list(const std::vector<std::string>& args);     // targets/cmd_list_sign
 int cmd_signals(const std::vector<std::string>& args);  // targets/cmd_list_signals.cpp
 int cmd_plot(const std::vector<std::string>& args);     // targets/cmd_plot.cpp
 int cmd_dbc(const std::vector<std::string>& args);      // targets/cmd_dbc.cpp
+int cmd_test(const std::vector<std::string>& args);     // targets/cmd_test.cpp
 
 }  // namespace ehpt::cli

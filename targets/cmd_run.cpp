@@ -13,7 +13,8 @@ namespace ehpt::cli {
 namespace {
 
 const char* kRunHelp =
-    "usage: ehpt run SCENARIO [--out DIR] [--set key=value ...] [--plot] [--quiet]\n"
+    "usage: ehpt run SCENARIO [--out DIR] [--set key=value ...] [--fault SPEC ...] [--plot]\n"
+    "                [--quiet]\n"
     "                [--realtime [--period T] [--cpu N] [--priority P]]\n"
     "\n"
     "SCENARIO is a .toml file, or a name from 'ehpt list' (e.g. ev_nedc).\n"
@@ -35,6 +36,14 @@ const char* kRunHelp =
     "                     --set vehicle.vehicle.mass_kg=1800   (the file's [vehicle] table)\n"
     "                     --set vehicle.ecu.soc_ref=0.62\n"
     "                   Every key of the scenario and vehicle files: docs/scenarios.md\n"
+    "  --fault SPEC     add a fault, repeatable, as a [[fault]] table on one line of key=value\n"
+    "                   pairs: --fault \"kind=stuck target=batSOC at_s=300\" (docs/testing.md;\n"
+    "                   timeseries.csv gets a faults_active column). A scenario with [[expect]]\n"
+    "                   tables prints its verdict; an expectation that fails exits 5\n"
+    "  --fault SPEC     add a fault, repeatable: a [[fault]] table as key=value pairs on one\n"
+    "                   line, --fault \"kind=stuck target=batSOC at_s=300\" (docs/testing.md;\n"
+    "                   timeseries.csv gets a faults_active column). A scenario with [[expect]]\n"
+    "                   tables prints its verdict; an expectation that fails exits 5\n"
     "  --plot           draw the figures into DIR (as 'ehpt plot DIR'; needs timeseries.csv,\n"
     "                   refused with output.timeseries=false); a failed plot keeps the run\n"
     "                   and exits 1\n"
@@ -58,7 +67,7 @@ const char* kRunHelp =
 int cmd_run(const std::vector<std::string>& args) {
   if (wants_help(args)) return out(kRunHelp) ? 0 : 1;
   std::string scenario, out_dir;
-  std::vector<std::string> sets;
+  std::vector<std::string> sets, faults;
   bool do_plot = false, quiet = false;
   RealtimeArgs rt;
   for (std::size_t i = 0; i < args.size(); ++i) {
@@ -67,7 +76,7 @@ int cmd_run(const std::vector<std::string>& args) {
       return rc;
     }
     const std::string& a = args[i];
-    if ((a == "--out" || a == "--set") && i + 1 >= args.size()) {
+    if ((a == "--out" || a == "--set" || a == "--fault") && i + 1 >= args.size()) {
       std::cerr << a << " needs a value\n" << kRunHelp;
       return 1;
     }
@@ -79,6 +88,8 @@ int cmd_run(const std::vector<std::string>& args) {
       }
     } else if (a == "--set") {
       sets.push_back(args[++i]);
+    } else if (a == "--fault") {
+      faults.push_back(args[++i]);
     } else if (a == "--plot") {
       do_plot = true;
     } else if (a == "--quiet") {
@@ -98,7 +109,7 @@ int cmd_run(const std::vector<std::string>& args) {
     return 1;
   }
   ehpt::hil::Scenario sc;
-  if (const int rc = load(scenario, sets, sc); rc != 0) return rc;
+  if (const int rc = load(scenario, sets, sc, faults); rc != 0) return rc;
   if (const int rc = check_realtime(rt, sc); rc != 0) return rc;
   if (do_plot && !sc.output.timeseries) {
     // refused before the run: the figures are drawn from timeseries.csv, which it would not write

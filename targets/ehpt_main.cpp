@@ -61,6 +61,7 @@ const char* kMainHelp =
     "  bench            the timing and determinism benchmark; a table and bench.json (--quick: < 1 min)\n"
     "  replay RUN_DIR   run a recorded 'ehpt plant' session again, offline, bit for bit\n"
     "  dbc FILE.dbc     check a DBC as ehpt reads it, list its messages, decode frames with it\n"
+    "  test PATH...     run ECU test files (faults, expectations): a verdict table and JUnit XML\n"
     "  sweep CAMPAIGN   run a campaign (scenarios x parameters) locally or as a Slurm job array;\n"
     "                   merged results.csv and results.jsonl\n"
     "\n"
@@ -69,7 +70,8 @@ const char* kMainHelp =
     "'ehpt <command> --help' gives the options of a command.\n"
     "Exit codes: 0 ok, 1 usage, output or system error, 2 bad input (nothing run), 3 run-time\n"
     "fault (outputs kept), 4 a degraded bus session (no ECU, timeouts, bus errors; outputs\n"
-    "kept), 128+N stopped by signal N: 130 Ctrl-C, 143 SIGTERM, 129 SIGHUP (outputs so far kept).\n";
+    "kept), 5 an expectation failed ('ehpt run' of a test; outputs kept), 128+N stopped by\n"
+    "signal N: 130 Ctrl-C, 143 SIGTERM, 129 SIGHUP (outputs so far kept).\n";
 
 int dispatch(std::vector<std::string> args) {
   if (args.empty()) {
@@ -91,6 +93,7 @@ int dispatch(std::vector<std::string> args) {
   if (cmd == "signals") return cmd_signals(args);
   if (cmd == "plot") return cmd_plot(args);
   if (cmd == "dbc") return cmd_dbc(args);
+  if (cmd == "test") return cmd_test(args);
   if (cmd == "plant") return cmd_plant(args);
   if (cmd == "ecu") return cmd_ecu(args);
   if (cmd == "bench") return cmd_bench(args);

@@ -7,6 +7,7 @@
 
 #include "hil/config/config_reader.hpp"
 #include "hil/config/scenario.hpp"
+#include "hil/config/test_reader.hpp"
 #include "hil/config/vehicle_kinds.hpp"
 #include "io/number_format.hpp"
 
@@ -167,8 +168,8 @@ bool load_vehicle_chain(FileRef ref, std::vector<toml::table>& docs, Context& ct
 }
 
 // load_scenario's work; cycle: the cycle as arrays in place of the scenario's file (nullptr: the file)
-bool load(const std::string& path, const std::vector<std::string>& overrides, const CycleArrays* cycle, Scenario& out,
-          std::vector<std::string>& errors) {
+bool load(const std::string& path, const std::vector<std::string>& overrides, const std::vector<std::string>& fault_args,
+          const CycleArrays* cycle, Scenario& out, std::vector<std::string>& errors) {
   Context ctx;
   out = Scenario{};
   out.path = path;
@@ -184,10 +185,44 @@ bool load(const std::string& path, const std::vector<std::string>& overrides, co
     out.inputs = std::move(ctx.inputs);
     return false;
   }
+  // a test file names the scenario it runs (scenario = "NAME" or a path): that file is read
+  // under it, so the test's keys override the scenario's and its tables add to them
+  toml::table base_doc;
+  bool has_base = false;
+  if (const toml::node* n = scenario_doc.get("scenario")) {
+    const auto v = n->value_exact<std::string>();
+    std::string reason, base;
+    if (v && !v->empty()) {
+      const bool is_path = v->find('/') != std::string::npos || v->ends_with(".toml");
+      fs::path p(*v);
+      if (is_path && p.is_relative()) p = fs::path(path).parent_path() / p;
+      base = resolve_scenario(is_path ? p.lexically_normal().string() : *v, reason);
+    } else {
+      reason = "must be a scenario's name ('ehpt list') or a scenario file (a non-empty string)";
+    }
+    if (base.empty()) {
+      ctx.errors.push_back(location(n, path) + ": scenario = " + node_text(*n) + ": " + reason);
+    } else if (parse_toml(base, base_doc, ctx)) {
+      if (const toml::node* again = base_doc.get("scenario")) {
+        ctx.errors.push_back(location(again, base) + ": scenario: " + path + " runs " + base +
+                             ", which names another scenario itself; a test names the scenario it runs, one level only");
+      } else {
+        has_base = true;
+        out.base_path = base;
+      }
+    }
+    if (!has_base) {
+      errors = ctx.errors;
+      out.inputs = std::move(ctx.inputs);
+      return false;
+    }
+  }
   std::vector<Layer> layers;
   for (auto d = set_docs.rbegin(); d != set_docs.rend(); ++d) layers.push_back({&*d, false});
   layers.push_back({&scenario_doc, false});
+  if (has_base) layers.push_back({&base_doc, false});
   Reader sc(layers, "", path, ctx);
+  sc.known("scenario");
 
   out.description = sc.text("description", "");
   const FileRef vehicle_ref = choose_vehicle(layers, sc, path, ctx);
@@ -250,6 +285,8 @@ bool load(const std::string& path, const std::vector<std::string>& overrides, co
     r.finish();
   }
 
+  read_tests(layers, sc, fault_args, out, ctx);
+
   // the vehicle: --set vehicle.*, then the scenario's [vehicle] table, then the vehicle file and
   // the files it extends, the base last
   sc.finish();
@@ -263,6 +300,7 @@ bool load(const std::string& path, const std::vector<std::string>& overrides, co
   std::vector<Layer> vlayers;
   for (auto d = set_docs.rbegin(); d != set_docs.rend(); ++d) vlayers.push_back({d->get_as<toml::table>("vehicle"), false});
   vlayers.push_back({scenario_doc.get_as<toml::table>("vehicle"), false});
+  if (has_base) vlayers.push_back({base_doc.get_as<toml::table>("vehicle"), false});
   for (const toml::table& doc : vehicle_docs) vlayers.push_back({&doc, true});
   for (std::size_t i = 0; i + vehicle_docs.size() < vlayers.size(); ++i) {
     // only a vehicle file extends another: in a scenario the vehicle is named by vehicle = "..."
@@ -369,6 +407,7 @@ bool load(const std::string& path, const std::vector<std::string>& overrides, co
     }
     if (read.set_ecu_period != nullptr) read.set_ecu_period(out, t.period_s);
   }
+  check_test_times(out, ctx);
   for (std::string& w : ctx.warnings) out.warnings.push_back(std::move(w));
   out.inputs = std::move(ctx.inputs);
   errors = ctx.errors;
@@ -379,12 +418,17 @@ bool load(const std::string& path, const std::vector<std::string>& overrides, co
 
 bool load_scenario(const std::string& path, const std::vector<std::string>& overrides, Scenario& out,
                    std::vector<std::string>& errors) {
-  return load(path, overrides, nullptr, out, errors);
+  return load(path, overrides, {}, nullptr, out, errors);
+}
+
+bool load_scenario(const std::string& path, const std::vector<std::string>& overrides,
+                   const std::vector<std::string>& faults, Scenario& out, std::vector<std::string>& errors) {
+  return load(path, overrides, faults, nullptr, out, errors);
 }
 
 bool load_scenario_with_cycle(const std::string& path, const std::vector<std::string>& overrides,
                               const CycleArrays& cycle, Scenario& out, std::vector<std::string>& errors) {
-  return load(path, overrides, &cycle, out, errors);
+  return load(path, overrides, {}, &cycle, out, errors);
 }
 
 }  // namespace ehpt::hil

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "hil/config/any_params.hpp"
+#include "hil/config/test_spec.hpp"
 
 namespace ehpt::hil {
 
@@ -78,6 +79,14 @@ struct Scenario {
   std::vector<std::string> warnings;  // legal but surprising settings, "file:line: field = value: why"
   std::vector<InputFile> inputs;      // every file read, in the order read, each once
   std::vector<std::string> overrides; // the --set texts as given ("key=value"), in order
+  // ECU tests (docs/testing.md): faults at the plant's message seams, expectations on its
+  // outputs, and what the file says about itself; the --fault texts as given
+  std::vector<FaultSpec> faults;
+  std::vector<ExpectSpec> expects;
+  TestSettings test;
+  std::vector<std::string> fault_args;
+  // a test file's `scenario = "NAME"`: the scenario it runs (empty: the file is the scenario)
+  std::string base_path;
 };
 
 // A text as a TOML basic string, quotes and backslashes escaped, control characters as \u00XX:
@@ -85,8 +94,13 @@ struct Scenario {
 std::string toml_string(const std::string& text);
 
 // overrides: "dotted.key=value" as given to --set (value parsed as TOML, else taken as text).
+// faults: --fault texts ("kind=stuck target=batSOC at_s=10"), added to the file's [[fault]]s.
+// A file with `scenario = "NAME"` (a test file) is read over that scenario: its keys override
+// the scenario's, its [[fault]] and [[expect]] tables add to the scenario's.
 bool load_scenario(const std::string& path, const std::vector<std::string>& overrides, Scenario& out,
                    std::vector<std::string>& errors);
+bool load_scenario(const std::string& path, const std::vector<std::string>& overrides,
+                   const std::vector<std::string>& faults, Scenario& out, std::vector<std::string>& errors);
 
 // A drive cycle given as numbers instead of a CSV file (the Python module's cycle=(t_s, v_m_s)):
 // time in s, speed in m/s. It takes the place of the scenario's `cycle` file (cycle_periodic

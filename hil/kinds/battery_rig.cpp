@@ -43,6 +43,7 @@ KindRead read_battery_rig_kind(Reader& vr, const KindInput& in, Scenario& out, P
     r.length_unknown = true;  // the profile's problem was reported: its length is unknown
   }
   check_signals(plant::BatteryRig::kSignals, out.output.signals, ctx);
+  check_test_targets_of(plant::BatteryRig::kSignals, out, ctx);
   out.plant = std::move(p);
   return r;
 }

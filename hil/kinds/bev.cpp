@@ -31,6 +31,7 @@ KindRead read_bev_kind(Reader& vr, const KindInput& in, Scenario& out, Problems&
   plant::validate(p, problems);
   if (problems.empty()) plant::warn(p.drive, "drive", warnings);
   check_signals(plant::BevPlant::kSignals, out.output.signals, ctx);
+  check_test_targets_of(plant::BevPlant::kSignals, msgs::kEvSensorFieldTable, msgs::kEvCommandFieldTable, out, ctx);
   KindRead r{cycle_length(p.driver), false, true};
   out.plant = std::move(p);
   return r;

@@ -49,6 +49,7 @@ KindRead read_drive_rig_kind(Reader& vr, const KindInput& in, Scenario& out, Pro
   plant::validate(p, problems);
   if (problems.empty()) plant::warn(p.drive, "drive", warnings);
   check_signals(plant::DriveRig(p).signals(), out.output.signals, ctx);
+  check_test_targets_of(plant::DriveRig(p).signals(), out, ctx);
   out.plant = std::move(p);
   return {};
 }

@@ -14,7 +14,9 @@
 #include "hil/run/codec_ecu.hpp"
 #include "hil/config/config_components.hpp"
 #include "hil/run/simulation_of.hpp"
+#include "hil/config/test_reader.hpp"
 #include "hil/config/vehicle_kinds.hpp"
+#include "msgs/fields.hpp"
 #include "solvers/integrators.hpp"
 
 namespace ehpt::hil::kinds {

@@ -34,6 +34,7 @@ KindRead read_pm_test(Reader& vr, const KindInput& in, Scenario& out, Problems& 
   vr.finish();
   plant::validate(p, problems);
   check_signals(plant::PmDriveTest::kSignals, out.output.signals, ctx);
+  check_test_targets_of(plant::PmDriveTest::kSignals, out, ctx);
   out.plant = std::move(p);
   return {};
 }
@@ -47,6 +48,7 @@ KindRead read_am_test(Reader& vr, const KindInput& in, Scenario& out, Problems& 
   vr.finish();
   plant::validate(p, problems);
   check_signals(plant::AmDriveTest::kSignals, out.output.signals, ctx);
+  check_test_targets_of(plant::AmDriveTest::kSignals, out, ctx);
   out.plant = std::move(p);
   return {};
 }

@@ -88,6 +88,7 @@ KindRead read_psd_kind(Reader& vr, const KindInput& in, Scenario& out, Problems&
     }
   }
   check_signals(plant::PsdPlant::kSignals, out.output.signals, ctx);
+  check_test_targets_of(plant::PsdPlant::kSignals, msgs::kPsdSensorFieldTable, msgs::kPsdCommandFieldTable, out, ctx);
   KindRead r{cycle_length(p.driver), false, true};
   // MBecu's filters and integrators step with the ECU period load_scenario settles on
   r.set_ecu_period = [](Scenario& s, double period_s) { s.ecu.get<ecu::PsdEcuParams>().period_s = period_s; };

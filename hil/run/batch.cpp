@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "hil/diag/alloc_guard.hpp"
+#include "hil/run/expectations.hpp"
 #include "hil/run/pacer.hpp"
 #include "hil/diag/provenance.hpp"
 #include "hil/run/row_queue.hpp"
@@ -376,10 +377,12 @@ struct Report {
   bool audit_closes = true;
   std::int64_t codec_saturations = 0;
   std::string status = "ok";
+  TestRecord test{};
 };
 
-Report report_of(const Simulation& sim, Streamed run) {
+Report report_of(Simulation& sim, Streamed run) {
   Report r{sim.stats(), sim.metrics(), sim.figures(), sim.audit(), std::move(run)};
+  r.test = sim.test_record();
   r.sim_s = sim.time_s();
   r.codec_saturations = sim.ecu_codec_saturations();
   r.distance_m = r.fig.distance_m.value_or(0.0);
@@ -396,6 +399,113 @@ Report report_of(const Simulation& sim, Streamed run) {
     r.status = "interrupted";
   }
   return r;
+}
+
+// A summary figure an expectation checks (hil/config/test_reader.cpp lists them).
+double figure_value(const std::string& name, const Report& r) {
+  if (name == "soc_start") return r.fig.soc_start.value_or(NAN);
+  if (name == "soc_end") return r.fig.soc_end.value_or(NAN);
+  if (name == "soc_delta") return r.fig.soc_start ? *r.fig.soc_end - *r.fig.soc_start : NAN;
+  if (name == "fuel_g") return r.fig.fuel_g ? r.fuel_g : NAN;
+  if (name == "distance_m") return r.fig.distance_m ? r.distance_m : NAN;
+  if (name == "energy_residual_rel") return r.relative;
+  if (name == "plant_fault_steps") return static_cast<double>(r.st.fault_steps);
+  if (name == "speed_error_max_kmh") return r.mt.has_speed ? r.mt.speed_error_max_kmh : NAN;
+  return NAN;
+}
+
+// The verdict of a test: every expectation's outcome as lines, the faults' spans.
+TestVerdict verdict_of(const Scenario& sc, const Report& r) {
+  TestVerdict v;
+  v.present = sc.test.is_test;
+  if (!v.present) return v;
+  v.expect_fail = sc.test.expect_fail;
+  const double h = sc.solver.step_s;
+  bool all = true;
+  for (std::size_t i = 0; i < sc.expects.size(); ++i) {
+    const ExpectSpec& e = sc.expects[i];
+    ExpectOutcome o = i < r.test.outcomes.size() ? r.test.outcomes[i] : ExpectOutcome{};
+    if (!e.figure.empty()) {
+      o = judge_figure(e, figure_value(e.figure, r));
+      // a figure of a run that stopped early is not the figure of the run asked for
+      if (r.st.fault != 0 || r.run.interrupted_by != 0) {
+        o.passed = false;
+        o.why = ExpectOutcome::Why::kNotReached;
+        o.step = r.st.steps_done;
+      }
+    }
+    ExpectLine line{e.name, o.passed, expect_message(e, o, h)};
+    if (o.step >= 0) line.time_s = static_cast<double>(o.step) * h;
+    line.value = o.value;
+    if (!o.passed && v.first_failure.empty()) v.first_failure = e.name + ": " + line.message;
+    all = all && o.passed;
+    v.expectations.push_back(std::move(line));
+  }
+  for (std::size_t i = 0; i < sc.faults.size(); ++i) {
+    const FaultSpec& f = sc.faults[i];
+    FaultLine line{f.name, fault_effect_name(f.effect), f.target};
+    if (i < r.test.faults.size() && r.test.faults[i].first_step >= 0) {
+      line.first_s = static_cast<double>(r.test.faults[i].first_step) * h;
+      line.last_s = static_cast<double>(r.test.faults[i].last_step) * h;
+      line.active_steps = r.test.faults[i].steps;
+    }
+    v.faults.push_back(std::move(line));
+  }
+  // a run that stopped on a plant fault or a signal did not do what the test asked
+  v.all_held = all && r.st.fault == 0 && r.run.interrupted_by == 0;
+  if (v.first_failure.empty() && !v.all_held) {
+    v.first_failure = r.st.fault != 0 ? "the run stopped on a plant fault: " + fault_text(r.st.fault) : "the run was interrupted";
+  }
+  v.passed = v.expect_fail ? !v.all_held : v.all_held;
+  return v;
+}
+
+io::JsonObject test_json(const TestVerdict& v) {
+  io::JsonObject j;
+  j.text("verdict", v.passed ? "passed" : "failed");
+  j.boolean("expect_fail", v.expect_fail);
+  j.boolean("all_expectations_held", v.all_held);
+  if (!v.first_failure.empty()) j.text("first_failure", v.first_failure);
+  std::vector<io::JsonObject> expects, faults;
+  for (const ExpectLine& e : v.expectations) {
+    io::JsonObject o;
+    o.text("name", e.name);
+    o.boolean("passed", e.passed);
+    o.text("message", e.message);
+    o.number("time_s", e.time_s);
+    o.number("value", e.value);
+    expects.push_back(std::move(o));
+  }
+  for (const FaultLine& f : v.faults) {
+    io::JsonObject o;
+    o.text("name", f.name);
+    o.text("kind", f.kind);
+    o.text("target", f.target);
+    o.number("first_s", f.first_s);
+    o.number("last_s", f.last_s);
+    o.integer("active_steps", f.active_steps);
+    faults.push_back(std::move(o));
+  }
+  j.objects("expectations", expects);
+  j.objects("faults", faults);
+  return j;
+}
+
+std::string test_text(const TestVerdict& v) {
+  std::string s;
+  for (const FaultLine& f : v.faults) {
+    s += "fault         " + f.name + " (" + f.kind + (f.target.empty() ? "" : " " + f.target) + "): " +
+         (f.active_steps > 0 ? "acted " + io::number_text(f.first_s) + " .. " + io::number_text(f.last_s) + " s, " +
+                                   std::to_string(f.active_steps) + " steps"
+                             : std::string("never acted")) +
+         "\n";
+  }
+  for (const ExpectLine& e : v.expectations) {
+    s += std::string(e.passed ? "expect ok     " : "EXPECT FAILED ") + e.name + ": " + e.message + "\n";
+  }
+  s += std::string("verdict       ") + (v.passed ? "passed" : "FAILED") +
+       (v.expect_fail ? (v.all_held ? " (written to fail, but every expectation held)" : " (expected failure)") : "") + "\n";
+  return s;
 }
 
 // The warning of an energy audit that does not close, with its likely causes.
@@ -468,7 +578,8 @@ std::string realtime_text(const RealtimeRun& rt) {
 }
 
 io::JsonObject summary_json(const Scenario& sc, const Report& r, const std::vector<std::string>& warnings,
-                            const CommandSource& commands, const std::vector<std::string>& degraded) {
+                            const CommandSource& commands, const std::vector<std::string>& degraded,
+                            const TestVerdict& test) {
   io::JsonObject j;
   const RunStats& st = r.st;
   const MetricTotals& mt = r.mt;
@@ -545,6 +656,7 @@ io::JsonObject summary_json(const Scenario& sc, const Report& r, const std::vect
   j.number("peak_rss_MB", static_cast<double>(peak_rss_bytes()) / (1024.0 * 1024.0));
   if (r.run.realtime) j.object("realtime", realtime_json(*r.run.realtime));
   j.strings("warnings", warnings);
+  if (test.present) j.object("test", test_json(test));
   j.object("provenance", provenance_json(sc, commands));
   return j;
 }
@@ -617,8 +729,11 @@ void conclude(const Scenario& sc, const Report& r, const ExternalDriver* driver,
   std::vector<std::string> warnings = sc.warnings;
   warnings.insert(warnings.end(), res.warnings.begin(), res.warnings.end());
   if (driver != nullptr) res.degraded = driver->degraded_reasons();
-  res.summary = summary_json(sc, r, warnings, driver != nullptr ? driver->command_source() : CommandSource{}, res.degraded);
+  res.test = verdict_of(sc, r);
+  res.summary = summary_json(sc, r, warnings, driver != nullptr ? driver->command_source() : CommandSource{}, res.degraded,
+                             res.test);
   res.summary_text = summary_text(sc, r);
+  if (res.test.present) res.summary_text += test_text(res.test);
 }
 
 }  // namespace
@@ -628,12 +743,13 @@ MemoryRun run_in_memory(const Scenario& sc, const std::atomic<int>* stop) {
   const std::vector<SignalInfo> signals = scenario_signals(sc);
   const std::vector<int> columns = chosen_columns(sc, signals);
   for (const int c : columns) res.columns.emplace_back(signals[static_cast<std::size_t>(c)].name);
+  if (!sc.faults.empty()) res.columns.emplace_back("faults_active");
   const std::unique_ptr<Simulation> sim = make_simulation(sc, SimulationOptions{columns, kChunkSteps});
   if (sc.output.timeseries) {
     // the rows a whole run records (every decimation-th step and the last), so that the vector
     // does not grow in the loop; a longer record than 64 Mi values grows as it goes
     const double rows = static_cast<double>(sim->total_steps()) / static_cast<double>(sc.output.decimation) + 2.0;
-    res.rows.reserve(static_cast<std::size_t>(std::min(rows * static_cast<double>(columns.size()), 64.0 * 1024 * 1024)));
+    res.rows.reserve(static_cast<std::size_t>(std::min(rows * static_cast<double>(res.columns.size()), 64.0 * 1024 * 1024)));
   }
   MemorySink sink(sc.output.timeseries ? &res.rows : nullptr);
   BatchOptions opt;
@@ -641,6 +757,7 @@ MemoryRun run_in_memory(const Scenario& sc, const std::atomic<int>* stop) {
   std::ostringstream no_log;  // no progress line, no driver: nothing is written to it
   const Report r = report_of(*sim, stream(*sim, sc, sink, opt, no_log));
   conclude(sc, r, nullptr, res);
+  if (res.exit_code == 0 && res.test.present && !res.test.passed) res.exit_code = kExitExpectationFailed;
   return res;
 }
 
@@ -670,6 +787,9 @@ BatchResult run_batch(const Scenario& sc, const BatchOptions& opt, std::ostream&
   for (std::size_t c = 0; c < columns.size(); ++c) {
     header += (c ? "," : "") + std::string(signals[static_cast<std::size_t>(columns[c])].name);
   }
+  // a test's faults: which act at each row, bit i fault i (docs/testing.md)
+  const std::size_t width = columns.size() + (sc.faults.empty() ? 0 : 1);
+  if (!sc.faults.empty()) header += ",faults_active";
   header += "\n";
 
   SimulationOptions sim_opt{columns, kChunkSteps};
@@ -678,9 +798,9 @@ BatchResult run_batch(const Scenario& sc, const BatchOptions& opt, std::ostream&
     sim_opt.fault_policy = FaultPolicy::kHold;
   }
   const std::unique_ptr<Simulation> sim = make_simulation(sc, sim_opt);
-  CsvSink sink(csv, header, columns.size());
+  CsvSink sink(csv, header, width);
   const Report r = report_of(*sim, opt.realtime != nullptr
-                                       ? stream_realtime(*sim, sc, header, columns.size(), csv, opt, log)
+                                       ? stream_realtime(*sim, sc, header, width, csv, opt, log)
                                        : stream(*sim, sc, sink, opt, log));
   std::string finish_error;
   if (opt.driver != nullptr && r.run.csv_error.empty()) opt.driver->finish(finish_error);
@@ -709,6 +829,7 @@ BatchResult run_batch(const Scenario& sc, const BatchOptions& opt, std::ostream&
     res.exit_code = 1;
   }
   if (res.exit_code == 0 && !res.degraded.empty() && !opt.allow_degraded) res.exit_code = kExitDegraded;
+  if (res.exit_code == 0 && res.test.present && !res.test.passed) res.exit_code = kExitExpectationFailed;
   res.results_dir = dir.results_dir();
   for (const std::string& w : dir.warnings()) res.warnings.push_back(w);
   return res;

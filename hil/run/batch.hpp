@@ -7,6 +7,7 @@
 #include <atomic>
 #include <functional>
 #include <iosfwd>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -83,9 +84,35 @@ inline constexpr int kExitDegraded = 4;
 // coarse for the dynamics gives percent (step_s = 1 s on Sort1: 30 %).
 inline constexpr double kAuditWarnRelative = 1e-3;
 
+// A test's verdict (a scenario with faults or expectations; docs/testing.md).
+struct ExpectLine {
+  std::string name;
+  bool passed = false;
+  std::string message;                         // what was expected and what happened
+  double time_s = std::numeric_limits<double>::quiet_NaN();  // where it was decided (NaN: nowhere)
+  double value = std::numeric_limits<double>::quiet_NaN();
+};
+struct FaultLine {
+  std::string name, kind, target;
+  double first_s = std::numeric_limits<double>::quiet_NaN(), last_s = std::numeric_limits<double>::quiet_NaN();
+  std::int64_t active_steps = 0;
+};
+struct TestVerdict {
+  bool present = false;      // the scenario is a test
+  bool expect_fail = false;  // written to fail
+  bool all_held = false;     // every expectation held (and the run did what it was asked)
+  bool passed = false;       // all_held, or (expect_fail) not all_held
+  std::vector<ExpectLine> expectations;
+  std::vector<FaultLine> faults;
+  std::string first_failure;  // the first expectation that failed: "name: message"
+};
+// The exit code of `ehpt run` when a scenario's expectation failed.
+inline constexpr int kExitExpectationFailed = 5;
+
 struct BatchResult {
   int exit_code = 0;  // 0 ok, 3 run-time fault, 4 degraded session, 128 + signal interrupted, 1 output error
   std::vector<std::string> degraded;  // why the session was degraded (empty: it was not)
+  TestVerdict test;                   // a test's verdict (test.present)
   io::JsonObject summary;
   std::string summary_text;          // human-readable lines for the terminal
   std::vector<std::string> warnings; // for the terminal: "warning: ..."

@@ -16,12 +16,14 @@ namespace ehpt::hil {
 template <class Outputs>
 class Recorder {
  public:
-  // Start-up: signals is the plant's list, columns the indices to record.
+  // Start-up: signals is the plant's list, columns the indices to record; bits (if given) a
+  // last column, the faults acting (a test's faults_active).
   Recorder(std::span<const plant::Signal<Outputs>> signals, const std::vector<int>& columns,
-           std::int64_t decimation, std::int64_t chunk_steps)
-      : decimation_(decimation) {
+           std::int64_t decimation, std::int64_t chunk_steps, const unsigned* bits = nullptr)
+      : decimation_(decimation), bits_(bits) {
     for (int c : columns) members_.push_back(signals[static_cast<std::size_t>(c)].member);
-    rows_.resize(static_cast<std::size_t>((chunk_steps / decimation_ + 4) * static_cast<std::int64_t>(members_.size())));
+    width_ = members_.size() + (bits_ != nullptr ? 1 : 0);
+    rows_.resize(static_cast<std::size_t>((chunk_steps / decimation_ + 4) * static_cast<std::int64_t>(width_)));
   }
 
   // Run phase: whether grid point n is one that is written without being forced.
@@ -30,24 +32,27 @@ class Recorder {
   // Run phase: records y as the row of step n (once per n).
   void record(std::int64_t n, const Outputs& y) {
     if (last_recorded_ == n) return;
-    if ((row_count_ + 1) * members_.size() > rows_.size()) {
+    if ((row_count_ + 1) * width_ > rows_.size()) {
       ++dropped_;
       return;
     }
-    double* row = rows_.data() + row_count_ * members_.size();
+    double* row = rows_.data() + row_count_ * width_;
     for (std::size_t c = 0; c < members_.size(); ++c) row[c] = y.*members_[c];
+    if (bits_ != nullptr) row[members_.size()] = static_cast<double>(*bits_);
     ++row_count_;
     last_recorded_ = n;
   }
 
   // Rows since the last clear (row-major, columns as given).
-  std::span<const double> rows() const { return {rows_.data(), row_count_ * members_.size()}; }
+  std::span<const double> rows() const { return {rows_.data(), row_count_ * width_}; }
   void clear() { row_count_ = 0; }
   std::int64_t dropped() const { return dropped_; }
 
  private:
   std::int64_t decimation_;
+  const unsigned* bits_;
   std::vector<double Outputs::*> members_;
+  std::size_t width_ = 0;
   std::vector<double> rows_;
   std::size_t row_count_ = 0;
   std::int64_t last_recorded_ = -1;

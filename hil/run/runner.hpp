@@ -22,6 +22,8 @@
 #include <type_traits>
 #include <vector>
 
+#include "hil/run/expectations.hpp"
+#include "hil/run/fault_injector.hpp"
 #include "hil/run/metrics.hpp"
 #include "hil/run/port.hpp"
 #include "hil/run/recorder.hpp"
@@ -72,17 +74,6 @@ struct RunnerOptions {
 // A runner without a controller: the plant's inputs stay as constructed.
 struct NoController {};
 
-// The sensor message of a plant that has one (Plant::Sensors), else an empty struct.
-template <class Plant>
-struct SensorsOf {
-  struct type {};
-};
-template <class Plant>
-  requires requires { typename Plant::Sensors; }
-struct SensorsOf<Plant> {
-  using type = typename Plant::Sensors;
-};
-
 // Controller: a discrete-time ECU, update(const Plant::Sensors&, Plant::Inputs& command), run
 // every `controller_ratio` steps. At its sample step n the plant writes the sensor message
 // (plant.sense at t_n, stamped {t_n, n, sequence}); the command computed from it (stamped
@@ -102,9 +93,13 @@ class Runner {
   using Sensors = typename SensorsOf<Plant>::type;
   using Port = EcuPort<Sensors, Inputs>;
 
-  // pacer: when each step may start (none: at once)
-  Runner(const Plant& plant, const RunnerOptions& opt, Controller* controller = nullptr, StepPacer* pacer = nullptr)
+  // pacer: when each step may start (none: at once). faults, checks: a test's faults at the
+  // message seams and its expectations on the outputs (none: a plain run; both outlive the runner)
+  Runner(const Plant& plant, const RunnerOptions& opt, Controller* controller = nullptr, StepPacer* pacer = nullptr,
+         FaultInjector<Plant>* faults = nullptr, ExpectationChecker<Plant>* checks = nullptr)
       : plant_(plant),
+        faults_(faults != nullptr && !faults->empty() ? faults : nullptr),
+        checks_(checks != nullptr && !checks->empty() ? checks : nullptr),
         external_ecu_(opt.external_ecu),
         controller_(controller),
         pacer_(pacer),
@@ -115,7 +110,8 @@ class Runner {
         stepper_(plant, integrator_, 0.0, opt.step_s),
         total_steps_(opt.total_steps),
         chunk_steps_(opt.chunk_steps),
-        recorder_(plant.signals(), opt.columns, opt.decimation, opt.chunk_steps),
+        recorder_(plant.signals(), opt.columns, opt.decimation, opt.chunk_steps,
+                  faults_ != nullptr ? &fault_mask_ : nullptr),
         metrics_(Plant::kMetrics, opt.step_s),
         decimation_(opt.decimation) {
     // commands in flight: one per ECU period of latency, and one more
@@ -123,8 +119,12 @@ class Runner {
     x0_ = plant.initial_state();
     x_ = x0_;
     m_ = plant.initial_modes(x_);
+    // every output at every step where an expectation or a fault's condition reads them
+    full_outputs_ = checks_ != nullptr || (faults_ != nullptr && faults_->needs_outputs());
     if (pacer_ != nullptr) pacer_->wait_for_step(0);
+    begin_faults(0);
     tick_controller(0);
+    actuate(0);
     if (external_ecu_) {
       awaiting_command_ = true;  // the caller reads the sensors at t_0 and writes a command first
     } else {
@@ -167,15 +167,21 @@ class Runner {
     requires std::is_same_v<S, typename SensorsOf<Plant>::type>
   void sense(S& sensors) {
     sensors.stamp = msgs::Stamp{stepper_.time_s(n_), n_, sensor_sequence_++};
-    plant_.sense(sensors.stamp.time_s, x_, m_, inputs_, sensors);
+    plant_.sense(sensors.stamp.time_s, x_, m_, u(), sensors);
+    if (faults_ != nullptr) faults_->sensors(n_, sensors.stamp.time_s, sensors);
     sensors_ = sensors;  // a sample step is sampled once: a port's exchange there gets this one
     sensed_step_ = n_;
   }
   void set_command(const Inputs& command) {
     inputs_ = command;
+    actuate(n_);
     dx_observed_step_ = -1;  // taken with the old command
   }
+  // The ECU's command (what a command fault acts on) and what the plant integrates from.
   const Inputs& command() const { return inputs_; }
+  const Inputs& applied_command() const { return u(); }
+  // The faults acting at the current step (bit i: the scenario's fault i).
+  unsigned fault_mask() const { return fault_mask_; }
 
   bool finished() const { return (n_ >= total_steps_ && !awaiting_command_) || stopped_by_fault(); }
   std::int64_t step_index() const { return n_; }
@@ -217,7 +223,7 @@ class Runner {
       // moved since (same x, modes, inputs): the integrator's first stage and the crossings at
       // the step's start, evaluations saved, the same result
       const bool observed = dx_observed_step_ == n_;
-      const solvers::StepReport r = stepper_.advance(n_, x_, m_, inputs_, observed ? &dx_observed_ : nullptr,
+      const solvers::StepReport r = stepper_.advance(n_, x_, m_, u(), observed ? &dx_observed_ : nullptr,
                                                      observed && z_observed_ ? z_observed_values_.data() : nullptr);
       dx_observed_step_ = -1;
       stats_.events += r.events;
@@ -228,7 +234,9 @@ class Runner {
       if constexpr (kPaced) {
         if (pacer_ != nullptr) pacer_->wait_for_step(n_);
       }
+      begin_faults(n_);
       tick_controller(n_);
+      actuate(n_);
       if (external_ecu_ && n_ % controller_ratio_ == 0) {
         // an ECU sample: the outputs at t_n follow with its command (as the built-in ECU's
         // do): from the port's exchange, or back to the caller, who reads the sensors at t_n
@@ -262,7 +270,10 @@ class Runner {
       }
     }
     changed = port_->before_step(n, inputs_) || changed;
-    if (changed) dx_observed_step_ = -1;  // taken with the old command
+    if (changed) {
+      actuate(n);              // a command fault acts on the command that came
+      dx_observed_step_ = -1;  // taken with the old command
+    }
     if (awaiting_command_) {
       awaiting_command_ = false;
       observe(n);
@@ -286,7 +297,8 @@ class Runner {
       next_sample_step_ = n + controller_ratio_;
       const msgs::Stamp stamp{stepper_.time_s(n), n, sensor_sequence_++};
       sensors_.stamp = stamp;
-      plant_.sense(stamp.time_s, x_, m_, inputs_, sensors_);
+      plant_.sense(stamp.time_s, x_, m_, u(), sensors_);
+      if (faults_ != nullptr) faults_->sensors(n, stamp.time_s, sensors_);
       Inputs command = inputs_;  // what the ECU does not set stays as it was
       controller_->update(sensors_, command);
       command.stamp = msgs::Stamp{stamp.time_s, stamp.step, command_sequence_++};
@@ -311,10 +323,10 @@ class Runner {
     const bool row_due = n == next_row_step_;
     if (row_due) next_row_step_ = n + decimation_;
     if constexpr (solvers::PlantWithObservation<Plant>) {
-      const bool full = row_due || n == total_steps_ || n == run_end_ ||
+      const bool full = full_outputs_ || row_due || n == total_steps_ || n == run_end_ ||
                         (external_ecu_ && (n + 1) % controller_ratio_ == 0);
       if (!full) {
-        plant_.observe(t_s, x_, m_, inputs_, y_, dx_observed_, z_observed_values_.data());
+        plant_.observe(t_s, x_, m_, u(), y_, dx_observed_, z_observed_values_.data());
         dx_observed_step_ = n;
         z_observed_ = true;
         y_full_ = false;
@@ -326,6 +338,9 @@ class Runner {
     }
     if (n == 0) y0_ = y_;
     metrics_.template observe<Plant::kMetrics>(n, y_);
+    if (faults_ != nullptr || checks_ != nullptr) [[unlikely]] {
+      test_observe(n);
+    }
     const auto fault = static_cast<unsigned>(y_.fault);
     if (fault != 0) ++stats_.fault_steps;
     if (fault != 0 && stats_.fault == 0) {
@@ -338,14 +353,43 @@ class Runner {
     if (row_due || n == total_steps_ || (fault != 0 && stats_.fault_step == n)) recorder_.record(n, y_);
   }
 
+  // The command the plant integrates from: the ECU's, or what a command fault made of it.
+  [[gnu::always_inline]] const Inputs& u() const { return actuating_ ? applied_ : inputs_; }
+
+  // Run phase: which faults act at grid point n, before its sample and command (once per n).
+  [[gnu::always_inline]] void begin_faults(std::int64_t n) {
+    if (faults_ != nullptr) [[unlikely]] {
+      fault_mask_ = faults_->begin_step(n);
+    }
+  }
+  // Run phase: the command faults on the command in force at grid point n.
+  [[gnu::always_inline]] void actuate(std::int64_t n) {
+    if (faults_ != nullptr && faults_->acts_on_commands()) [[unlikely]] {
+      const bool was = actuating_;
+      actuating_ = faults_->commands(n, stepper_.time_s(n), inputs_, applied_);
+      if (actuating_ || was) dx_observed_step_ = -1;  // dx/dt taken with another command
+    }
+  }
+  // Run phase: the outputs at grid point n for the faults' conditions and the expectations
+  // (once per n).
+  [[gnu::noinline]] void test_observe(std::int64_t n) {
+    if (n == tested_step_) return;
+    tested_step_ = n;
+    complete_outputs(n);
+    if (faults_ != nullptr) faults_->observe(n, y_);
+    if (checks_ != nullptr) {
+      checks_->observe(n, y_, faults_ != nullptr ? faults_->spans() : std::span<const FaultSpan>{});
+    }
+  }
+
   // Run phase: the full outputs at grid point n (and dx/dt there, if the plant gives it).
   void outputs_at(std::int64_t n) {
     const double t_s = stepper_.time_s(n);
     if constexpr (solvers::PlantWithOutputDerivatives<Plant>) {
-      plant_.outputs(t_s, x_, m_, inputs_, y_, dx_observed_);
+      plant_.outputs(t_s, x_, m_, u(), y_, dx_observed_);
       dx_observed_step_ = n;
     } else {
-      plant_.outputs(t_s, x_, m_, inputs_, y_);
+      plant_.outputs(t_s, x_, m_, u(), y_);
     }
     z_observed_ = false;
     y_full_ = true;
@@ -360,6 +404,12 @@ class Runner {
   }
 
   const Plant& plant_;
+  FaultInjector<Plant>* faults_ = nullptr;       // a test's faults, or none
+  ExpectationChecker<Plant>* checks_ = nullptr;  // a test's expectations, or none
+  unsigned fault_mask_ = 0;                      // the faults acting at the current step
+  bool actuating_ = false;                       // a command fault acts: the plant gets applied_
+  bool full_outputs_ = false;                    // every output at every step (faults' conditions, expectations)
+  std::int64_t tested_step_ = -1;                // the last grid point test_observe saw
   bool external_ecu_ = false;      // the caller is the ECU: it is asked at every sample step
   bool awaiting_command_ = false;  // stopped at a sample step, the outputs there not yet taken
   Controller* controller_;
@@ -384,7 +434,8 @@ class Runner {
   std::int64_t n_ = 0;
   State x0_, x_;
   Modes m_{};
-  Inputs inputs_{};
+  Inputs inputs_{};   // the ECU's command
+  Inputs applied_{};  // what the plant integrates from while a command fault acts
   typename SensorsOf<Plant>::type sensors_{};
   Outputs y_{}, y0_{};
   State dx_observed_;                   // dx/dt with the outputs at step dx_observed_step_

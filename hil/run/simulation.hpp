@@ -44,6 +44,13 @@ struct RunFigures {
   double fuel_density_kg_m3 = 0.0;            // with fuel_g: for L/100 km
 };
 
+// A test's record at the end of a run: when each fault acted, how each expectation ended (a
+// figure's outcome is left for the caller, who has the figures).
+struct TestRecord {
+  std::vector<FaultSpan> faults;        // the scenario's faults, in order
+  std::vector<ExpectOutcome> outcomes;  // the scenario's expectations, in order
+};
+
 class Simulation {
  public:
   virtual ~Simulation() = default;
@@ -79,6 +86,8 @@ class Simulation {
   virtual const MetricTotals& metrics() const = 0;
   virtual plant::EnergyAudit audit() const = 0;  // end of run; allocates
   virtual RunFigures figures() const = 0;
+  // The end: the faults' spans and the expectations' outcomes (allocates).
+  virtual TestRecord test_record() { return {}; }
   // Signals the CAN codec saturated (ecu.codec = "can"; else 0).
   virtual std::int64_t ecu_codec_saturations() const { return 0; }
 };

@@ -34,7 +34,11 @@ class SimulationOf final : public Simulation {
                             .ecu_latency_steps = sc.solver.ecu_latency_steps,
                             .fault_policy = opt.fault_policy,
                             .external_ecu = opt.external_ecu};
-    runner_ = std::make_unique<R>(*plant_, run, opt.external_ecu ? nullptr : controller_.get());
+    faults_ = std::make_unique<FaultInjector<Plant>>(sc.faults, *plant_, sc.solver.step_s, sc.solver.ecu_ratio);
+    expects_ = sc.expects;  // the checker refers to them
+    checks_ = std::make_unique<ExpectationChecker<Plant>>(expects_, *plant_, sc.solver.step_s, sc.solver.steps);
+    runner_ = std::make_unique<R>(*plant_, run, opt.external_ecu ? nullptr : controller_.get(), nullptr, faults_.get(),
+                                  checks_.get());
     values_.resize(signals_.size());
   }
 
@@ -66,6 +70,14 @@ class SimulationOf final : public Simulation {
   const RunStats& stats() const override { return runner_->stats(); }
   const MetricTotals& metrics() const override { return runner_->metrics(); }
   plant::EnergyAudit audit() const override { return plant_->audit(runner_->initial_state(), runner_->state()); }
+
+  TestRecord test_record() override {
+    TestRecord t;
+    t.faults.assign(faults_->spans().begin(), faults_->spans().end());
+    const auto o = checks_->finish();
+    t.outcomes.assign(o.begin(), o.end());
+    return t;
+  }
 
   std::int64_t ecu_codec_saturations() const override {
     if constexpr (requires(const Controller& c) { c.saturated_signals(); }) {
@@ -122,7 +134,10 @@ class SimulationOf final : public Simulation {
   double fuel_density_kg_m3_;
   std::vector<SignalInfo> signals_;
   std::vector<double> values_;  // outputs(), sized at start-up
-  std::unique_ptr<R> runner_;
+  std::vector<ExpectSpec> expects_;
+  std::unique_ptr<FaultInjector<Plant>> faults_;
+  std::unique_ptr<ExpectationChecker<Plant>> checks_;
+  std::unique_ptr<R> runner_;  // last: it refers to the faults and checks
 };
 
 }  // namespace ehpt::hil

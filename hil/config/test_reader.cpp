@@ -1,0 +1,546 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "hil/config/test_reader.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+
+#include "hil/config/scenario.hpp"
+#include "io/number_format.hpp"
+
+namespace ehpt::hil {
+
+const char* fault_effect_name(FaultEffect e) {
+  switch (e) {
+    case FaultEffect::kStuck: return "stuck";
+    case FaultEffect::kFixed: return "fixed";
+    case FaultEffect::kOffset: return "offset";
+    case FaultEffect::kGain: return "gain";
+    case FaultEffect::kNoise: return "noise";
+    case FaultEffect::kDrift: return "drift";
+    case FaultEffect::kDelay: return "delay";
+    case FaultEffect::kQuantise: return "quantise";
+    case FaultEffect::kIntermittent: return "intermittent";
+    case FaultEffect::kSaturate: return "saturate";
+    case FaultEffect::kLoss: return "loss";
+    case FaultEffect::kNoStart: return "no_start";
+  }
+  return "?";
+}
+
+const char* expect_window_name(ExpectWindow w) {
+  switch (w) {
+    case ExpectWindow::kAlways: return "always";
+    case ExpectWindow::kEventually: return "eventually";
+    case ExpectWindow::kWithin: return "within";
+    case ExpectWindow::kAtEnd: return "at_end";
+  }
+  return "?";
+}
+
+namespace detail {
+
+namespace {
+
+struct EffectInfo {
+  FaultEffect effect;
+  std::vector<std::string_view> required, optional;
+};
+
+const std::vector<EffectInfo>& effects() {
+  static const std::vector<EffectInfo> k = {
+      {FaultEffect::kStuck, {}, {}},
+      {FaultEffect::kFixed, {"value"}, {}},
+      {FaultEffect::kOffset, {"offset"}, {}},
+      {FaultEffect::kGain, {"gain"}, {}},
+      {FaultEffect::kNoise, {"sigma"}, {"seed"}},
+      {FaultEffect::kDrift, {"rate"}, {}},
+      {FaultEffect::kDelay, {"delay_s"}, {}},
+      {FaultEffect::kQuantise, {"step"}, {}},
+      {FaultEffect::kIntermittent, {"period_s"}, {"duty", "value"}},
+      {FaultEffect::kSaturate, {"limit"}, {}},
+      {FaultEffect::kLoss, {}, {}},
+      {FaultEffect::kNoStart, {}, {}},
+  };
+  return k;
+}
+
+constexpr std::array<std::string_view, 11> kParameters = {"value", "offset", "gain",     "sigma", "seed", "rate",
+                                                          "delay_s", "step", "period_s", "duty",  "limit"};
+
+constexpr std::array<std::string_view, 8> kFigures = {"soc_start", "soc_end",    "soc_delta",
+                                                      "fuel_g",    "distance_m", "energy_residual_rel",
+                                                      "plant_fault_steps", "speed_error_max_kmh"};
+
+std::string joined(const std::vector<std::string_view>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ", ") + std::string(x);
+  return s.empty() ? "none" : s;
+}
+
+std::string with_hint(const std::string& word, const std::vector<std::string>& names) {
+  std::string list;
+  for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+  const std::string best = closest_name(word, names);
+  return (best.empty() ? std::string() : "did you mean \"" + best + "\"? ") + "one of: " + list;
+}
+
+void read_fault(Reader& r, std::size_t index, Scenario& out, Context& ctx) {
+  FaultSpec f;
+  f.where = r.where();
+  f.name = r.text("name", "fault" + std::to_string(index + 1));
+  const std::string kind = r.text("kind", "");
+  const EffectInfo* info = nullptr;
+  std::vector<std::string> kinds;
+  for (const auto& e : effects()) {
+    kinds.emplace_back(fault_effect_name(e.effect));
+    if (kind == fault_effect_name(e.effect)) info = &e;
+  }
+  if (kind.empty()) {
+    ctx.error(r.where(), r.field("kind"), "", "missing: the fault's kind, one of " + with_hint("", kinds).substr(8));
+  } else if (info == nullptr) {
+    ctx.error(ctx.where[r.field("kind")], r.field("kind"), "\"" + kind + "\"", "unknown fault kind; " + with_hint(kind, kinds));
+  } else {
+    f.effect = info->effect;
+  }
+  f.target = r.text("target", f.effect == FaultEffect::kNoStart ? "iceON" : "");
+  if (f.target.empty() && info != nullptr) {
+    ctx.error(r.where(), r.field("target"), "", "missing: the field of the sensor or command message it acts on "
+                                                 "(`ehpt signals SCENARIO` lists them)");
+  }
+  if (f.effect == FaultEffect::kNoStart && f.target != "iceON") {
+    ctx.error(ctx.where[r.field("target")], r.field("target"), "\"" + f.target + "\"",
+              "kind = \"no_start\" acts on the engine: leave target out (or target = \"iceON\")");
+  }
+  // when it acts: [at_s, until_s) or from the step after `when` first holds
+  const bool has_at = r.has("at_s"), has_until = r.has("until_s"), has_duration = r.has("duration_s");
+  f.at_s = r.number("at_s", 0.0);
+  f.until_s = r.number("until_s", kForever);
+  const double duration_s = r.number("duration_s", kForever);
+  const std::string when = r.text("when", "");
+  if (!(std::isfinite(f.at_s) && f.at_s >= 0.0)) {
+    ctx.error(ctx.where[r.field("at_s")], r.field("at_s"), io::number_text(f.at_s), "must be a finite time >= 0 s");
+  }
+  if (has_until && has_duration) {
+    ctx.error(ctx.where[r.field("duration_s")], r.field("duration_s"), io::number_text(duration_s),
+              "give until_s or duration_s, not both");
+  } else if (has_duration) {
+    if (!(duration_s > 0.0)) {
+      ctx.error(ctx.where[r.field("duration_s")], r.field("duration_s"), io::number_text(duration_s), "must be > 0 s");
+    }
+    f.until_s = f.at_s + duration_s;
+  }
+  if (has_until && !(f.until_s > f.at_s)) {
+    ctx.error(ctx.where[r.field("until_s")], r.field("until_s"), io::number_text(f.until_s),
+              "must be later than at_s = " + io::number_text(f.at_s) + " (leave it out: to the end of the run)");
+  }
+  if (!when.empty()) {
+    std::string why;
+    f.has_when = true;
+    if (has_at) {
+      ctx.error(ctx.where[r.field("when")], r.field("when"), "\"" + when + "\"",
+                "give at_s or when, not both (a triggered fault starts at the step after its condition first holds)");
+    }
+    if (has_duration) {
+      ctx.error(ctx.where[r.field("duration_s")], r.field("duration_s"), io::number_text(duration_s),
+                "a triggered fault (when = ...) ends at until_s, an absolute time");
+    }
+    if (!parse_condition(when, f.when, why)) ctx.error(ctx.where[r.field("when")], r.field("when"), "\"" + when + "\"", why);
+  }
+  // the effect's parameters; one it does not use is a mistake, not a default
+  for (const std::string_view p : kParameters) {
+    if (!r.has(p) || info == nullptr) {
+      r.known(p);
+      continue;
+    }
+    const bool used = std::find(info->required.begin(), info->required.end(), p) != info->required.end() ||
+                      std::find(info->optional.begin(), info->optional.end(), p) != info->optional.end();
+    if (!used) {
+      r.find(p);
+      ctx.error(ctx.where[r.field(p)], r.field(p), "",
+                "not a parameter of kind = \"" + kind + "\" (its parameters: " + joined(info->required) +
+                    (info->optional.empty() ? "" : "; optional: " + joined(info->optional)) + ")");
+    }
+  }
+  if (info != nullptr) {
+    for (const std::string_view p : info->required) {
+      if (!r.has(p)) {
+        ctx.error(r.where(), r.field(p), "", "missing: kind = \"" + kind + "\" needs " + joined(info->required));
+      }
+    }
+  }
+  f.value = r.number("value", 0.0);
+  f.offset = r.number("offset", 0.0);
+  f.gain = r.number("gain", 1.0);
+  f.sigma = r.number("sigma", 0.0);
+  f.rate = r.number("rate", 0.0);
+  f.delay_s = r.number("delay_s", 0.0);
+  f.step = r.number("step", 0.0);
+  f.period_s = r.number("period_s", 0.0);
+  f.duty = r.number("duty", 0.5);
+  f.limit = r.number("limit", 0.0);
+  const std::int64_t seed = r.integer("seed", static_cast<std::int64_t>(index) + 1);
+  if (seed < 0) ctx.error(ctx.where[r.field("seed")], r.field("seed"), std::to_string(seed), "must be >= 0");
+  f.seed = static_cast<std::uint64_t>(std::max<std::int64_t>(seed, 0));
+  const auto need = [&](std::string_view key, double v, bool ok, const char* expectation) {
+    if (r.has(key) && !ok) ctx.error(ctx.where[r.field(key)], r.field(key), io::number_text(v), expectation);
+  };
+  for (const auto& [key, v] : {std::pair<std::string_view, double>{"value", f.value}, {"offset", f.offset},
+                               {"gain", f.gain}, {"rate", f.rate}}) {
+    need(key, v, std::isfinite(v), "must be a finite number");
+  }
+  need("sigma", f.sigma, f.sigma > 0.0 && std::isfinite(f.sigma), "must be a finite number > 0 (the noise's standard deviation, in the target's unit)");
+  need("delay_s", f.delay_s, f.delay_s > 0.0 && std::isfinite(f.delay_s), "must be a finite time > 0 s");
+  need("step", f.step, f.step > 0.0 && std::isfinite(f.step), "must be a finite number > 0 (the quantum, in the target's unit)");
+  need("period_s", f.period_s, f.period_s > 0.0 && std::isfinite(f.period_s), "must be a finite time > 0 s");
+  need("duty", f.duty, f.duty > 0.0 && f.duty < 1.0, "must be in (0, 1): the fraction of each period the fault acts");
+  need("limit", f.limit, f.limit >= 0.0 && std::isfinite(f.limit), "must be a finite number >= 0 (|value| is clamped to it)");
+  r.finish();
+  for (const FaultSpec& g : out.faults) {
+    if (g.name == f.name) {
+      ctx.error(ctx.where[r.field("name")], r.field("name"), "\"" + f.name + "\"", "another fault has this name (" + g.where + ")");
+    }
+  }
+  out.faults.push_back(std::move(f));
+}
+
+void read_expect(Reader& r, std::size_t index, Scenario& out, Context& ctx) {
+  ExpectSpec e;
+  e.where = r.where();
+  e.name = r.text("name", "expect" + std::to_string(index + 1));
+  e.signal = r.text("signal", "");
+  e.figure = r.text("figure", "");
+  if (e.signal.empty() == e.figure.empty()) {
+    ctx.error(r.where(), r.field("signal"), "", "give either signal (a plant output, `ehpt signals`) or figure (a summary "
+                                                "figure at the end of the run), not both and not neither");
+  }
+  if (!e.figure.empty()) {
+    const auto& f = expect_figures();
+    if (std::find(f.begin(), f.end(), e.figure) == f.end()) {
+      std::vector<std::string> names(f.begin(), f.end());
+      ctx.error(ctx.where[r.field("figure")], r.field("figure"), "\"" + e.figure + "\"", "unknown figure; " + with_hint(e.figure, names));
+    }
+  }
+  e.has_min = r.has("min");
+  e.has_max = r.has("max");
+  e.min = r.number("min", 0.0);
+  e.max = r.number("max", 0.0);
+  const bool has_value = r.has("value");
+  e.value = r.number("value", 0.0);
+  e.other = r.text("other", "");
+  const bool has_tol = r.has("tol");
+  e.tol = r.number("tol", 0.0);
+  e.has_near = has_value || !e.other.empty();
+  e.has_rate = r.has("rate_max");
+  e.rate_max = r.number("rate_max", 0.0);
+  if (!e.has_min && !e.has_max && !e.has_near && !e.has_rate) {
+    ctx.error(r.where(), r.field("max"), "", "missing: a bound (min, max, value or other with tol, rate_max)");
+  }
+  if (has_value && !e.other.empty()) {
+    ctx.error(ctx.where[r.field("other")], r.field("other"), "\"" + e.other + "\"", "give value or other, not both");
+  }
+  if (e.has_near && !has_tol) ctx.error(r.where(), r.field("tol"), "", "missing: value and other need tol (>= 0)");
+  if (has_tol && !e.has_near) {
+    ctx.error(ctx.where[r.field("tol")], r.field("tol"), io::number_text(e.tol), "tol bounds |x - value| or |x - other|: give one");
+  }
+  if (has_tol && !(e.tol >= 0.0 && std::isfinite(e.tol))) {
+    ctx.error(ctx.where[r.field("tol")], r.field("tol"), io::number_text(e.tol), "must be a finite number >= 0");
+  }
+  for (const auto& [key, v] : {std::pair<std::string_view, double>{"min", e.min}, {"max", e.max}, {"value", e.value}}) {
+    if (r.has(key) && !std::isfinite(v)) ctx.error(ctx.where[r.field(key)], r.field(key), io::number_text(v), "must be finite");
+  }
+  if (e.has_min && e.has_max && e.min > e.max) {
+    ctx.error(ctx.where[r.field("max")], r.field("max"), io::number_text(e.max),
+              "must be >= min = " + io::number_text(e.min) + " (nothing could pass)");
+  }
+  if (e.has_rate && !(e.rate_max >= 0.0 && std::isfinite(e.rate_max))) {
+    ctx.error(ctx.where[r.field("rate_max")], r.field("rate_max"), io::number_text(e.rate_max),
+              "must be a finite number >= 0 (per second)");
+  }
+  if (!e.figure.empty() && (e.has_rate || !e.other.empty())) {
+    ctx.error(r.where(), r.field("figure"), "\"" + e.figure + "\"", "a figure takes min, max or value with tol");
+  }
+  const std::string window = r.text("window", e.figure.empty() ? "always" : "at_end");
+  std::vector<std::string> windows;
+  bool known = false;
+  for (ExpectWindow w : {ExpectWindow::kAlways, ExpectWindow::kEventually, ExpectWindow::kWithin, ExpectWindow::kAtEnd}) {
+    windows.emplace_back(expect_window_name(w));
+    if (window == expect_window_name(w)) {
+      e.window = w;
+      known = true;
+    }
+  }
+  if (!known) {
+    ctx.error(ctx.where[r.field("window")], r.field("window"), "\"" + window + "\"", "unknown window; " + with_hint(window, windows));
+  }
+  if (!e.figure.empty() && e.window != ExpectWindow::kAtEnd) {
+    ctx.error(ctx.where[r.field("window")], r.field("window"), "\"" + window + "\"", "a figure is checked at the end: window = \"at_end\"");
+  }
+  const bool timed = e.window == ExpectWindow::kAlways || e.window == ExpectWindow::kEventually;
+  for (const std::string_view key : {"from_s", "to_s"}) {
+    if (r.has(key) && !timed) {
+      r.find(key);
+      ctx.error(ctx.where[r.field(key)], r.field(key), "", "only windows always and eventually take from_s and to_s");
+    }
+  }
+  e.from_s = r.number("from_s", 0.0);
+  e.to_s = r.number("to_s", kForever);
+  if (!(std::isfinite(e.from_s) && e.from_s >= 0.0)) {
+    ctx.error(ctx.where[r.field("from_s")], r.field("from_s"), io::number_text(e.from_s), "must be a finite time >= 0 s");
+  }
+  if (r.has("to_s") && !(e.to_s >= e.from_s)) {
+    ctx.error(ctx.where[r.field("to_s")], r.field("to_s"), io::number_text(e.to_s), "must be >= from_s = " + io::number_text(e.from_s));
+  }
+  if (e.has_rate && e.window != ExpectWindow::kAlways) {
+    ctx.error(ctx.where[r.field("rate_max")], r.field("rate_max"), io::number_text(e.rate_max), "a rate limit holds always: window = \"always\"");
+  }
+  e.after = r.text("after", "");
+  e.within_s = r.number("within_s", 0.0);
+  if (e.window == ExpectWindow::kWithin) {
+    if (e.after.empty()) {
+      ctx.error(r.where(), r.field("after"), "", "missing: window = \"within\" needs the event: after = \"FAULT.start\", "
+                                                 "\"FAULT.end\" or a condition (\"soc_1 < 0.5\")");
+    }
+    if (!(e.within_s > 0.0 && std::isfinite(e.within_s))) {
+      ctx.error(r.has("within_s") ? ctx.where[r.field("within_s")] : r.where(), r.field("within_s"),
+                r.has("within_s") ? io::number_text(e.within_s) : "", "window = \"within\" needs within_s, a finite time > 0 s");
+    }
+  } else {
+    for (const std::string_view key : {"after", "within_s"}) {
+      if (r.has(key)) ctx.error(ctx.where[r.field(key)], r.field(key), "", "only window = \"within\" takes after and within_s");
+    }
+  }
+  if (!e.after.empty()) {
+    const auto dot = e.after.rfind('.');
+    const std::string head = dot == std::string::npos ? "" : e.after.substr(0, dot);
+    const std::string tail = dot == std::string::npos ? "" : e.after.substr(dot + 1);
+    if ((tail == "start" || tail == "end") && e.after.find_first_of("<>") == std::string::npos) {
+      std::vector<std::string> names;
+      for (std::size_t i = 0; i < out.faults.size(); ++i) {
+        names.push_back(out.faults[i].name);
+        if (out.faults[i].name == head) e.after_fault = static_cast<int>(i);
+      }
+      e.after_end = tail == "end";
+      if (e.after_fault < 0) {
+        ctx.error(ctx.where[r.field("after")], r.field("after"), "\"" + e.after + "\"",
+                  "no fault is named \"" + head + "\"; " + (names.empty() ? "this run has no faults" : with_hint(head, names)));
+      }
+    } else {
+      std::string why;
+      if (!parse_condition(e.after, e.after_condition, why)) {
+        ctx.error(ctx.where[r.field("after")], r.field("after"), "\"" + e.after + "\"",
+                  why + "; or name a fault's start or end: \"FAULT.start\", \"FAULT.end\"");
+      }
+    }
+  }
+  r.finish();
+  for (const ExpectSpec& g : out.expects) {
+    if (g.name == e.name) {
+      ctx.error(ctx.where[r.field("name")], r.field("name"), "\"" + e.name + "\"", "another expectation has this name (" + g.where + ")");
+    }
+  }
+  out.expects.push_back(std::move(e));
+}
+
+// "kind=stuck target=batSOC at_s=10" -> a table, each value TOML (else text), labelled for messages
+bool parse_fault_arg(const std::string& text, toml::table& out, Context& ctx) {
+  const std::string label = "--fault " + (text.size() <= 120 ? text : text.substr(0, 80) + "...");
+  if (text.find_first_of("\r\n") != std::string::npos) {
+    ctx.errors.push_back(label + ": one fault per --fault, on one line");
+    return false;
+  }
+  std::size_t i = 0;
+  while (i < text.size()) {
+    while (i < text.size() && text[i] == ' ') ++i;
+    if (i >= text.size()) break;
+    std::size_t end = i;
+    bool quoted = false;
+    while (end < text.size() && (quoted || text[end] != ' ')) {
+      if (text[end] == '"') quoted = !quoted;
+      ++end;
+    }
+    const std::string pair = text.substr(i, end - i);
+    i = end;
+    const auto eq = pair.find('=');
+    if (eq == std::string::npos || eq == 0) {
+      ctx.errors.push_back(label + ": \"" + pair + "\": expected key=value, e.g. --fault \"kind=stuck target=batSOC at_s=10\"");
+      return false;
+    }
+    const std::string key = pair.substr(0, eq), value = pair.substr(eq + 1);
+    if (key.find_first_not_of("abcdefghijklmnopqrstuvwxyz_0123456789") != std::string::npos) {
+      ctx.errors.push_back(label + ": \"" + key + "\": not a fault key (kind, target, at_s, until_s, ...)");
+      return false;
+    }
+    if (out.contains(key)) {
+      ctx.errors.push_back(label + ": " + key + " is given twice");
+      return false;
+    }
+    toml::table one;
+    try {
+      one = toml::parse(key + " = " + value, label);
+    } catch (const toml::parse_error&) {
+      try {
+        one = toml::parse(key + " = " + toml_string(value), label);
+      } catch (const toml::parse_error& e) {
+        ctx.errors.push_back(label + ": cannot parse " + pair + ": " + std::string(e.description()));
+        return false;
+      }
+    }
+    for (auto&& [k, v] : one) out.insert(k, v);
+  }
+  return true;
+}
+
+}  // namespace
+
+std::span<const std::string_view> expect_figures() { return kFigures; }
+
+bool parse_condition(const std::string& text, SignalCondition& out, std::string& why) {
+  out.text = text;
+  static constexpr std::array<std::pair<std::string_view, SignalCondition::Op>, 4> kOps = {{
+      {"<=", SignalCondition::Op::kLessEqual},
+      {">=", SignalCondition::Op::kGreaterEqual},
+      {"<", SignalCondition::Op::kLess},
+      {">", SignalCondition::Op::kGreater},
+  }};
+  for (const auto& [op, kind] : kOps) {
+    const auto at = text.find(op);
+    if (at == std::string::npos) continue;
+    const auto trim = [](std::string s) {
+      const auto a = s.find_first_not_of(' '), b = s.find_last_not_of(' ');
+      return a == std::string::npos ? std::string() : s.substr(a, b - a + 1);
+    };
+    out.signal = trim(text.substr(0, at));
+    const std::string number = trim(text.substr(at + op.size()));
+    out.op = kind;
+    char* end = nullptr;
+    errno = 0;
+    out.value = std::strtod(number.c_str(), &end);
+    if (out.signal.empty() || number.empty() || end == nullptr || *end != '\0' || errno != 0 || !std::isfinite(out.value)) {
+      why = "expected SIGNAL < NUMBER (or <=, >, >=), e.g. \"soc_1 < 0.3\"";
+      return false;
+    }
+    return true;
+  }
+  why = "expected SIGNAL < NUMBER (or <=, >, >=), e.g. \"soc_1 < 0.3\"";
+  return false;
+}
+
+void read_tests(const std::vector<Layer>& layers, Reader& sc, const std::vector<std::string>& fault_args, Scenario& out,
+                Context& ctx) {
+  {
+    Reader t = sc.sub("test");
+    out.test.is_test = sc.has("test");
+    out.test.where = t.where();
+    out.test.expect_fail = t.flag("expect_fail", false);
+    t.finish();
+  }
+  sc.known("fault");
+  sc.known("expect");
+  // every layer's [[fault]] and [[expect]], the lowest (the named scenario) first: a test adds to
+  // what its scenario states
+  const auto arrays = [&](const char* key, auto&& each) {
+    std::size_t index = 0;
+    for (auto l = layers.rbegin(); l != layers.rend(); ++l) {
+      if (l->table == nullptr) continue;
+      const toml::node* n = l->table->get(key);
+      if (n == nullptr) continue;
+      const std::string file = n->source().path ? *n->source().path : out.path;
+      Reader layer({{l->table, false}}, "", file, ctx);
+      for (Reader& r : layer.table_array(key)) each(r, index++);
+    }
+    return index;
+  };
+  arrays("fault", [&](Reader& r, std::size_t i) { read_fault(r, i, out, ctx); });
+  std::vector<toml::table> arg_tables(fault_args.size());
+  for (std::size_t i = 0; i < fault_args.size(); ++i) {
+    if (!parse_fault_arg(fault_args[i], arg_tables[i], ctx)) continue;
+    const std::string label = "--fault " + fault_args[i];
+    Reader r({{&arg_tables[i], false}}, "fault[" + std::to_string(out.faults.size()) + "]", label, ctx, label);
+    read_fault(r, out.faults.size(), out, ctx);
+  }
+  if (out.faults.size() > kMaxFaults) {
+    ctx.errors.push_back(out.faults[kMaxFaults].where + ": fault: more than " + std::to_string(kMaxFaults) +
+                         " faults in one run (each is one bit of the faults_active column)");
+  }
+  arrays("expect", [&](Reader& r, std::size_t i) { read_expect(r, i, out, ctx); });
+  if (!out.faults.empty() || !out.expects.empty()) out.test.is_test = true;
+  out.fault_args = fault_args;
+}
+
+void check_test_targets(std::span<const std::string_view> outputs, std::span<const std::string_view> sensors,
+                        std::span<const std::string_view> commands, Scenario& out, Context& ctx) {
+  const auto has = [](std::span<const std::string_view> v, const std::string& name) {
+    return std::find(v.begin(), v.end(), name) != v.end();
+  };
+  std::vector<std::string> output_names(outputs.begin(), outputs.end());
+  const auto output = [&](const std::string& where, const std::string& field, const std::string& name) {
+    if (!has(outputs, name)) {
+      ctx.errors.push_back(where + ": " + field + " = \"" + name + "\": not an output of this vehicle; " +
+                           with_hint(name, output_names));
+    }
+  };
+  for (std::size_t i = 0; i < out.faults.size(); ++i) {
+    FaultSpec& f = out.faults[i];
+    const std::string field = "fault[" + std::to_string(i) + "]";
+    if (f.has_when) output(f.where, field + ".when", f.when.signal);
+    if (f.target.empty()) continue;
+    if (sensors.empty() && commands.empty()) {
+      ctx.errors.push_back(f.where + ": " + field + ".target = \"" + f.target +
+                           "\": this vehicle has no ECU messages to fault (a rig); faults act on the sensor and "
+                           "command messages of vehicles with an ECU");
+      continue;
+    }
+    if (has(sensors, f.target)) {
+      f.side = FaultSide::kSensor;
+    } else if (has(commands, f.target)) {
+      f.side = FaultSide::kCommand;
+    } else {
+      std::vector<std::string> names(sensors.begin(), sensors.end());
+      names.insert(names.end(), commands.begin(), commands.end());
+      ctx.errors.push_back(f.where + ": " + field + ".target = \"" + f.target +
+                           "\": not a field of this vehicle's sensor or command message; " + with_hint(f.target, names));
+      continue;
+    }
+    if (f.target == "fault" || f.target == "locked") {
+      ctx.errors.push_back(f.where + ": " + field + ".target = \"" + f.target +
+                           "\": the plant's status bits are not a sensor value to fault");
+    }
+    if (f.effect == FaultEffect::kNoStart && f.side != FaultSide::kCommand) {
+      ctx.errors.push_back(f.where + ": " + field + ": kind = \"no_start\" needs a vehicle with an engine command (iceON)");
+    }
+  }
+  for (std::size_t i = 0; i < out.expects.size(); ++i) {
+    ExpectSpec& e = out.expects[i];
+    const std::string field = "expect[" + std::to_string(i) + "]";
+    if (!e.signal.empty()) output(e.where, field + ".signal", e.signal);
+    if (!e.other.empty()) output(e.where, field + ".other", e.other);
+    if (e.window == ExpectWindow::kWithin && e.after_fault < 0 && !e.after_condition.signal.empty()) {
+      output(e.where, field + ".after", e.after_condition.signal);
+    }
+  }
+}
+
+void check_test_times(Scenario& out, Context& ctx) {
+  if (out.solver.steps <= 0) return;
+  const double end_s = static_cast<double>(out.solver.steps) * out.solver.step_s;
+  for (std::size_t i = 0; i < out.faults.size(); ++i) {
+    const FaultSpec& f = out.faults[i];
+    if (!f.has_when && f.at_s > end_s) {
+      ctx.errors.push_back(f.where + ": fault[" + std::to_string(i) + "].at_s = " + io::number_text(f.at_s) +
+                           ": after the run's end (t = " + io::number_text(end_s) + " s): it would never act");
+    }
+  }
+  for (std::size_t i = 0; i < out.expects.size(); ++i) {
+    const ExpectSpec& e = out.expects[i];
+    if ((e.window == ExpectWindow::kAlways || e.window == ExpectWindow::kEventually) && e.from_s > end_s) {
+      ctx.errors.push_back(e.where + ": expect[" + std::to_string(i) + "].from_s = " + io::number_text(e.from_s) +
+                           ": after the run's end (t = " + io::number_text(end_s) + " s): nothing would be checked");
+    }
+  }
+}
+
+}  // namespace detail
+}  // namespace ehpt::hil

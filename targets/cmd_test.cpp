@@ -1,0 +1,398 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// `ehpt test`: ECU test files (a scenario with [[fault]]s and [[expect]]s, docs/testing.md),
+// each run as its own `ehpt run` child (a test that crashes fails alone; -j N at a time), its
+// verdict read back from its summary.json; a table, a JUnit file, an exit code.
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <csignal>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <map>
+
+#include <toml++/toml.h>
+
+#include "hil/config/scenario.hpp"
+#include "hil/run/batch.hpp"
+#include "io/json_value.hpp"
+#include "io/junit.hpp"
+#include "io/process.hpp"
+#include "io/text_file.hpp"
+#include "targets/cli.hpp"
+
+namespace fs = std::filesystem;
+
+namespace ehpt::cli {
+
+namespace {
+
+const char* kTestHelp =
+    "usage: ehpt test PATH... [--out DIR] [--junit FILE] [-j N] [--set key=value ...] [--quiet]\n"
+    "\n"
+    "Runs ECU test files and judges them (docs/testing.md). A test file is a scenario, or\n"
+    "names one (scenario = \"psecu2_nedc\") and overrides its keys, with [[fault]] tables (what\n"
+    "goes wrong, when) and [[expect]] tables (what must hold, when). PATH is a test file, a\n"
+    "folder (its *.toml files, sorted) or a suite file (tests = [\"a.toml\", ...]).\n"
+    "  --out DIR        the tests' folder (default out/test): DIR/<test>/ holds each run\n"
+    "                   (timeseries.csv with a faults_active column, summary.json with the\n"
+    "                   verdict), DIR/logs/<test>.log its messages\n"
+    "  --junit FILE     a JUnit XML report: one testcase per test, a failure names the first\n"
+    "                   expectation that failed, with its time and value\n"
+    "  -j N             tests at a time (default 1); each runs as its own process\n"
+    "  --set key=value  override a key of every test (as 'ehpt run --set')\n"
+    "  --quiet          print only the failures and the last line\n"
+    "\n"
+    "Every test file is checked before anything runs: a problem is 'file:line: field = value:\n"
+    "expectation' (exit 2). A test with [test] expect_fail = true is written to fail: it\n"
+    "passes when an expectation fails. Exit: 0 every test passed, 1 a test failed, 2 bad\n"
+    "input, 3 a test could not run to its end (a plant fault, a crash), 128+N stopped by signal N.\n";
+
+struct TestCase {
+  std::string path;  // the test file
+  std::string name;  // its folder name: the file's stem
+  std::string group; // the folder or suite it came from
+  std::string out_dir, log_path;
+  // after the run
+  enum class State { kPending, kPassed, kFailed, kError } state = State::kPending;
+  std::string first_failure;  // or the error
+  std::string details;        // every expectation's line
+  double wall_s = 0.0;
+  bool expect_fail = false;
+};
+
+bool is_suite(const std::string& path, std::vector<std::string>& tests, std::string& error) {
+  toml::table doc;
+  try {
+    doc = toml::parse_file(path);
+  } catch (const toml::parse_error&) {
+    return false;  // load_scenario reports it with its line
+  }
+  const toml::node* n = doc.get("tests");
+  if (n == nullptr) return false;
+  const toml::array* a = n->as_array();
+  if (a == nullptr || doc.size() > 2 || (doc.size() == 2 && !doc.contains("description"))) {
+    error = path + ": tests: a suite file holds tests = [\"FILE\", ...] (and a description), nothing else";
+    return true;
+  }
+  for (const toml::node& e : *a) {
+    const auto s = e.value_exact<std::string>();
+    if (!s || s->empty()) {
+      error = path + ":" + std::to_string(e.source().begin.line) + ": tests: every entry is a test file's path";
+      return true;
+    }
+    fs::path p(*s);
+    if (p.is_relative()) p = fs::path(path).parent_path() / p;
+    tests.push_back(p.lexically_normal().string());
+  }
+  return true;
+}
+
+// PATH... -> the test files, in order, each once. false with errors if a path is not one.
+bool collect(const std::vector<std::string>& paths, std::vector<TestCase>& out, std::vector<std::string>& errors) {
+  std::map<std::string, std::string> seen_names;  // name -> path
+  const auto add = [&](const std::string& path, const std::string& group) {
+    TestCase t;
+    t.path = path;
+    t.name = fs::path(path).stem().string();
+    t.group = group;
+    if (const auto it = seen_names.find(t.name); it != seen_names.end()) {
+      if (it->second != path) {
+        errors.push_back(path + ": a second test named \"" + t.name + "\" (also " + it->second +
+                         "): each test's folder is named after its file");
+      }
+      return;
+    }
+    seen_names[t.name] = path;
+    out.push_back(std::move(t));
+  };
+  for (const std::string& p : paths) {
+    std::error_code ec;
+    if (fs::is_directory(p, ec)) {
+      std::vector<std::string> files;
+      for (const auto& entry : fs::directory_iterator(p, ec)) {
+        if (entry.path().extension() == ".toml" && entry.is_regular_file(ec)) files.push_back(entry.path().string());
+      }
+      std::sort(files.begin(), files.end());
+      if (files.empty()) errors.push_back(p + ": a folder with no .toml test files");
+      for (const auto& f : files) add(f, fs::path(p).filename().string());
+      continue;
+    }
+    std::string reason;
+    const std::string file = hil::resolve_scenario(p, reason);
+    if (file.empty()) {
+      errors.push_back(p + ": " + reason);
+      continue;
+    }
+    std::vector<std::string> suite;
+    std::string error;
+    if (is_suite(file, suite, error)) {
+      if (!error.empty()) errors.push_back(error);
+      for (const auto& f : suite) add(f, fs::path(file).stem().string());
+      continue;
+    }
+    std::error_code aec;
+    add(file, fs::absolute(file, aec).parent_path().filename().string());
+  }
+  return errors.empty();
+}
+
+// The last lines of a log (a crashed test's report).
+std::string log_tail(const std::string& path) {
+  std::string text, reason;
+  if (!io::read_text_file(path, text, reason)) return "";
+  if (text.size() > 2000) text = "..." + text.substr(text.size() - 2000);
+  return text;
+}
+
+// A finished child: its verdict from its summary.json.
+void judge(TestCase& t, int status) {
+  std::string text, reason, error;
+  io::JsonValue summary;
+  const bool read = io::read_text_file(t.out_dir + "/summary.json", text, reason) && io::parse_json(text, summary, error);
+  const io::JsonValue* test = read ? summary.find("test") : nullptr;
+  const bool exited = WIFEXITED(status);
+  const int code = exited ? WEXITSTATUS(status) : -1;
+  if (test != nullptr) {
+    for (const auto& e : test->find("expectations") ? test->find("expectations")->items : std::vector<io::JsonValue>{}) {
+      const io::JsonValue* passed = e.find("passed");
+      const io::JsonValue* message = e.find("message");
+      const io::JsonValue* name = e.find("name");
+      if (passed && message && name) {
+        t.details += std::string(passed->boolean ? "ok     " : "FAILED ") + name->text + ": " + message->text + "\n";
+      }
+    }
+    if (const io::JsonValue* f = test->find("first_failure")) t.first_failure = f->text;
+    if (const io::JsonValue* x = test->find("expect_fail")) t.expect_fail = x->boolean;
+  }
+  const io::JsonValue* verdict = test != nullptr ? test->find("verdict") : nullptr;
+  if (exited && (code == 0 || code == hil::kExitExpectationFailed) && verdict != nullptr) {
+    const bool passed = verdict->text == "passed";
+    // the child's exit code and its summary say the same, or neither is believed
+    if (passed == (code == 0)) {
+      t.state = passed ? TestCase::State::kPassed : TestCase::State::kFailed;
+      if (passed && t.expect_fail) t.first_failure = "expected failure: " + t.first_failure;
+      if (!passed && t.expect_fail && t.first_failure.empty()) {
+        t.first_failure = "written to fail (expect_fail = true), but every expectation held";
+      }
+      return;
+    }
+  }
+  t.state = TestCase::State::kError;
+  std::string why;
+  if (!exited) {
+    why = "the run was killed by signal " + std::to_string(WTERMSIG(status));
+  } else if (code == 3) {
+    why = "the run stopped on a plant fault";
+    if (read) {
+      if (const io::JsonValue* f = summary.find("fault")) why += ": " + f->text;
+    }
+  } else {
+    why = "the run exited with status " + std::to_string(code);
+  }
+  t.first_failure = why;
+  t.details += "log (" + t.log_path + "):\n" + log_tail(t.log_path);
+}
+
+bool make_dir(const std::string& dir, std::string& error) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir, ec)) {
+    error = "cannot make the folder " + dir + ": " + (ec ? ec.message() : "not a folder");
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+int cmd_test(const std::vector<std::string>& args) {
+  if (wants_help(args)) return out(kTestHelp) ? 0 : 1;
+  std::vector<std::string> paths, sets;
+  std::string out_dir = "out/test", junit;
+  int jobs = 1;
+  bool quiet = false;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    if ((a == "--out" || a == "--junit" || a == "--set" || a == "-j") && i + 1 >= args.size()) {
+      std::cerr << a << " needs a value\n" << kTestHelp;
+      return 1;
+    }
+    if (a == "--out") {
+      out_dir = args[++i];
+    } else if (a == "--junit") {
+      junit = args[++i];
+    } else if (a == "--set") {
+      sets.push_back(args[++i]);
+    } else if (a == "-j") {
+      const std::string& v = args[++i];
+      char* end = nullptr;
+      const long n = std::strtol(v.c_str(), &end, 10);
+      if (v.empty() || *end != '\0' || n < 1 || n > 256) {
+        std::cerr << "-j " << v << ": must be a whole number of tests at a time in [1, 256]\n";
+        return 1;
+      }
+      jobs = static_cast<int>(n);
+    } else if (a == "--quiet") {
+      quiet = true;
+    } else if (!a.empty() && a[0] == '-') {
+      std::cerr << "unknown option " << a << "\n" << kTestHelp;
+      return 1;
+    } else {
+      paths.push_back(a);
+    }
+  }
+  if (paths.empty() || out_dir.empty()) {
+    std::cerr << kTestHelp;
+    return 1;
+  }
+  std::vector<TestCase> tests;
+  std::vector<std::string> errors;
+  collect(paths, tests, errors);
+  // every test checked before any runs: a typo in the tenth is found before the first takes an hour
+  for (TestCase& t : tests) {
+    hil::Scenario sc;
+    std::vector<std::string> e;
+    if (!hil::load_scenario(t.path, sets, sc, e)) {
+      errors.insert(errors.end(), e.begin(), e.end());
+      continue;
+    }
+    if (sc.expects.empty()) {
+      errors.push_back(t.path + ": no [[expect]] table: a test states what must hold (docs/testing.md)");
+    }
+    t.expect_fail = sc.test.expect_fail;
+  }
+  if (!errors.empty()) {
+    for (const auto& e : errors) std::cerr << e << "\n";
+    std::cerr << "nothing was run (" << errors.size() << " problem" << (errors.size() == 1 ? "" : "s") << ")\n";
+    return 2;
+  }
+  std::string error;
+  if (!make_dir(out_dir + "/logs", error)) {
+    std::cerr << "error: " << error << "\n";
+    return 1;
+  }
+  const std::string self = io::self_executable();
+  std::size_t next = 0, running = 0, done = 0;
+  std::map<int, std::size_t> children;  // pid -> test
+  std::map<int, std::chrono::steady_clock::time_point> started;
+  bool start_failed = false;
+  while (done < tests.size()) {
+    while (g_stop.load() == 0 && running < static_cast<std::size_t>(jobs) && next < tests.size()) {
+      TestCase& t = tests[next];
+      t.out_dir = out_dir + "/" + t.name;
+      t.log_path = out_dir + "/logs/" + t.name + ".log";
+      std::vector<std::string> argv{self, "run", t.path, "--out", t.out_dir, "--quiet"};
+      for (const auto& s : sets) {
+        argv.push_back("--set");
+        argv.push_back(s);
+      }
+      std::string reason;
+      const int pid = io::start_program(argv, t.log_path, t.log_path, true, reason);
+      if (pid < 0) {
+        t.state = TestCase::State::kError;
+        t.first_failure = "could not start: " + reason;
+        start_failed = true;
+        ++done;
+      } else {
+        children[pid] = next;
+        started[pid] = std::chrono::steady_clock::now();
+        ++running;
+      }
+      ++next;
+    }
+    if (running == 0) {
+      if (g_stop.load() != 0 || next >= tests.size()) break;
+      continue;
+    }
+    int status = 0;
+    const int pid = ::waitpid(-1, &status, 0);
+    if (pid < 0) {
+      if (errno == EINTR) {
+        if (g_stop.load() != 0) {
+          for (const auto& [p, i] : children) ::killpg(p, g_stop.load());
+        }
+        continue;
+      }
+      std::cerr << "error: waitpid: " << std::strerror(errno) << "\n";
+      return 1;
+    }
+    const auto it = children.find(pid);
+    if (it == children.end()) continue;
+    TestCase& t = tests[it->second];
+    t.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started[pid]).count();
+    judge(t, status);
+    children.erase(it);
+    --running;
+    ++done;
+    if (!quiet || t.state != TestCase::State::kPassed) {
+      const char* word = t.state == TestCase::State::kPassed ? "passed" : t.state == TestCase::State::kFailed ? "FAILED" : "ERROR";
+      std::cerr << "[" << done << "/" << tests.size() << "] " << word << "  " << t.name << "\n";
+    }
+  }
+
+  // the table: test, verdict, first failed expectation with its time and value
+  std::size_t passed = 0, failed = 0, broken = 0, not_run = 0;
+  std::size_t width = 4;
+  for (const TestCase& t : tests) width = std::max(width, t.name.size());
+  std::string table = "test" + std::string(width - 4 + 2, ' ') + "verdict  first failure\n";
+  std::vector<io::JunitCase> cases;
+  for (const TestCase& t : tests) {
+    std::string word;
+    io::JunitCase c;
+    c.name = t.name;
+    c.classname = t.group;
+    c.time_s = t.wall_s;
+    switch (t.state) {
+      case TestCase::State::kPassed:
+        ++passed;
+        word = t.expect_fail ? "xfail  " : "passed ";
+        c.details = t.details;
+        break;
+      case TestCase::State::kFailed:
+        ++failed;
+        word = "FAILED ";
+        c.result = io::JunitCase::Result::kFailed;
+        c.message = t.first_failure;
+        c.details = t.details;
+        break;
+      case TestCase::State::kError:
+        ++broken;
+        word = "ERROR  ";
+        c.result = io::JunitCase::Result::kError;
+        c.message = t.first_failure;
+        c.details = t.details;
+        break;
+      case TestCase::State::kPending:
+        ++not_run;
+        word = "not run";
+        c.result = io::JunitCase::Result::kError;
+        c.message = "not run: stopped by a signal";
+        break;
+    }
+    cases.push_back(c);
+    if (quiet && t.state == TestCase::State::kPassed) continue;
+    table += t.name + std::string(width - t.name.size() + 2, ' ') + word + "  " +
+             (t.state == TestCase::State::kPassed && !t.expect_fail ? std::string() : t.first_failure) + "\n";
+  }
+  table += std::to_string(tests.size()) + " test" + (tests.size() == 1 ? "" : "s") + ": " + std::to_string(passed) +
+           " passed, " + std::to_string(failed) + " failed, " + std::to_string(broken) + " errors" +
+           (not_run > 0 ? ", " + std::to_string(not_run) + " not run" : std::string()) + "; runs in " + out_dir + "\n";
+  const bool printed = out(table);
+  if (!junit.empty()) {
+    if (!io::write_file_atomically(junit, io::junit_xml("ehpt test", cases), error)) {
+      std::cerr << "error: " << error << "\n";
+      return 1;
+    }
+  }
+  if (g_stop.load() != 0) return 128 + g_stop.load();
+  if (broken > 0 || start_failed) return 3;
+  if (failed > 0) return 1;
+  return printed ? 0 : 1;
+}
+
+}  // namespace ehpt::cli
