@@ -493,6 +493,10 @@ void check_test_targets(std::span<const std::string_view> outputs, std::span<con
                            "command messages of vehicles with an ECU");
       continue;
     }
+    if (f.effect == FaultEffect::kNoStart && !has(commands, "iceON")) {
+      ctx.errors.push_back(f.where + ": " + field + ": kind = \"no_start\" acts on an engine; this vehicle has none");
+      continue;
+    }
     if (has(sensors, f.target)) {
       f.side = FaultSide::kSensor;
     } else if (has(commands, f.target)) {
@@ -526,8 +530,30 @@ void check_test_targets(std::span<const std::string_view> outputs, std::span<con
 void check_test_times(Scenario& out, Context& ctx) {
   if (out.solver.steps <= 0) return;
   const double end_s = static_cast<double>(out.solver.steps) * out.solver.step_s;
+  const double h = out.solver.step_s;
+  const auto whole = [](double value, double unit) {
+    const double ratio = value / unit;
+    return std::abs(ratio - std::round(ratio)) <= 1e-9 * std::max(1.0, ratio) && std::round(ratio) >= 1.0;
+  };
   for (std::size_t i = 0; i < out.faults.size(); ++i) {
     const FaultSpec& f = out.faults[i];
+    const std::string field = "fault[" + std::to_string(i) + "]";
+    if (f.effect == FaultEffect::kDelay) {
+      // a sensor value is sampled once per ECU period, a command integrated at every step
+      const bool sensor = f.side == FaultSide::kSensor;
+      const double unit = sensor ? h * static_cast<double>(out.solver.ecu_ratio) : h;
+      if (!whole(f.delay_s, unit)) {
+        ctx.errors.push_back(f.where + ": " + field + ".delay_s = " + io::number_text(f.delay_s) + ": must be a whole multiple of " +
+                             (sensor ? "the ECU period (" : "the plant step (") + io::number_text(unit) + " s)");
+      } else if (f.delay_s / unit > kMaxDelaySamples) {
+        ctx.errors.push_back(f.where + ": " + field + ".delay_s = " + io::number_text(f.delay_s) + ": more than 1e6 " +
+                             (sensor ? "samples" : "steps") + " of history");
+      }
+    }
+    if (f.effect == FaultEffect::kIntermittent && !whole(f.period_s, h)) {
+      ctx.errors.push_back(f.where + ": " + field + ".period_s = " + io::number_text(f.period_s) +
+                           ": must be a whole multiple of the plant step (" + io::number_text(h) + " s)");
+    }
     if (!f.has_when && f.at_s > end_s) {
       ctx.errors.push_back(f.where + ": fault[" + std::to_string(i) + "].at_s = " + io::number_text(f.at_s) +
                            ": after the run's end (t = " + io::number_text(end_s) + " s): it would never act");
