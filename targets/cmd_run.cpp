@@ -36,10 +36,7 @@ const char* kRunHelp =
     "                     --set vehicle.vehicle.mass_kg=1800   (the file's [vehicle] table)\n"
     "                     --set vehicle.ecu.soc_ref=0.62\n"
     "                   Every key of the scenario and vehicle files: docs/scenarios.md\n"
-    "  --fault SPEC     add a fault, repeatable, as a [[fault]] table on one line of key=value\n"
-    "                   pairs: --fault \"kind=stuck target=batSOC at_s=300\" (docs/testing.md;\n"
-    "                   timeseries.csv gets a faults_active column). A scenario with [[expect]]\n"
-    "                   tables prints its verdict; an expectation that fails exits 5\n"
+
     "  --fault SPEC     add a fault, repeatable: a [[fault]] table as key=value pairs on one\n"
     "                   line, --fault \"kind=stuck target=batSOC at_s=300\" (docs/testing.md;\n"
     "                   timeseries.csv gets a faults_active column). A scenario with [[expect]]\n"

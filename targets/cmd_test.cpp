@@ -33,6 +33,7 @@ namespace {
 
 const char* kTestHelp =
     "usage: ehpt test PATH... [--out DIR] [--junit FILE] [-j N] [--set key=value ...] [--quiet]\n"
+    "                 [--bus SPEC --ecu-cmd ARGV...]\n"
     "\n"
     "Runs ECU test files and judges them (docs/testing.md). A test file is a scenario, or\n"
     "names one (scenario = \"psecu2_nedc\") and overrides its keys, with [[fault]] tables (what\n"
@@ -46,6 +47,14 @@ const char* kTestHelp =
     "  -j N             tests at a time (default 1); each runs as its own process\n"
     "  --set key=value  override a key of every test (as 'ehpt run --set')\n"
     "  --quiet          print only the failures and the last line\n"
+    "  --bus SPEC --ecu-cmd ARGV...  the ECU outside: each test's plant runs as 'ehpt plant\n"
+    "                   TEST --bus SPEC --lockstep' and ehpt starts ARGV (the rest of the\n"
+    "                   line; no shell) as its ECU, {test}, {bus} and {prefix} replaced by the\n"
+    "                   test file, its bus and its LCM prefix. SPEC: socketcand:HOST:PORT\n"
+    "                   (test slot k of -j N on PORT + k) or lcm:URL (prefix EHPT_S<k>_). E.g.\n"
+    "                   --bus socketcand:127.0.0.1:29600 --ecu-cmd ehpt ecu {test} --bus {bus}\n"
+    "                   An ECU that exits non-zero or crashes is a test error (its status and\n"
+    "                   the tail of its log in the report)\n"
     "\n"
     "Every test file is checked before anything runs: a problem is 'file:line: field = value:\n"
     "expectation' (exit 2). A test with [test] expect_fail = true is written to fail: it\n"
@@ -56,7 +65,7 @@ struct TestCase {
   std::string path;  // the test file
   std::string name;  // its folder name: the file's stem
   std::string group; // the folder or suite it came from
-  std::string out_dir, log_path;
+  std::string out_dir, log_path, ecu_log_path;
   // after the run
   enum class State { kPending, kPassed, kFailed, kError } state = State::kPending;
   std::string first_failure;  // or the error
@@ -117,6 +126,12 @@ bool collect(const std::vector<std::string>& paths, std::vector<TestCase>& out, 
       for (const auto& entry : fs::directory_iterator(p, ec)) {
         if (entry.path().extension() == ".toml" && entry.is_regular_file(ec)) files.push_back(entry.path().string());
       }
+      // a suite file in the folder lists tests the folder holds anyway: not a test itself
+      std::erase_if(files, [](const std::string& f) {
+        std::vector<std::string> listed;
+        std::string ignored;
+        return is_suite(f, listed, ignored);
+      });
       std::sort(files.begin(), files.end());
       if (files.empty()) errors.push_back(p + ": a folder with no .toml test files");
       for (const auto& f : files) add(f, fs::path(p).filename().string());
@@ -198,6 +213,47 @@ void judge(TestCase& t, int status) {
   t.details += "log (" + t.log_path + "):\n" + log_tail(t.log_path);
 }
 
+// A stopped plant's ECU gets this long to end by itself (socketcand: the plant closed the
+// connection; LCM: its idle timeout) before it is stopped.
+constexpr double kEcuGrace_s = 15.0;
+
+// --bus and --ecu-cmd: each running test gets its own port (socketcand: PORT + slot) or LCM
+// channel prefix (EHPT_S<slot>_), so -j N sessions do not meet.
+struct BusOptions {
+  bool enabled = false, ecu_is_ehpt = false;
+  std::string spec, host;
+  int port = 0;
+  bool lcm = false;
+  std::vector<std::string> ecu_cmd;
+  bool parse(const std::string& text) {
+    spec = text;
+    if (text.rfind("lcm:", 0) == 0 && text.size() > 4) {
+      lcm = true;
+      return true;
+    }
+    if (text.rfind("socketcand:", 0) != 0) return false;
+    const auto colon = text.rfind(':');
+    host = text.substr(11, colon - 11);
+    char* end = nullptr;
+    const long p = std::strtol(text.c_str() + colon + 1, &end, 10);
+    if (host.empty() || colon <= 11 || *end != '\0' || p < 1 || p > 65535 - 256) return false;
+    port = static_cast<int>(p);
+    return true;
+  }
+  std::string spec_for(std::size_t slot) const {
+    return lcm ? spec : "socketcand:" + host + ":" + std::to_string(port + static_cast<int>(slot));
+  }
+  std::string prefix_for(std::size_t slot) const { return lcm ? "EHPT_S" + std::to_string(slot) + "_" : "EHPT_"; }
+};
+
+// {test}, {bus} and {prefix} in an argument of --ecu-cmd.
+std::string substitute(std::string a, const std::string& test, const std::string& bus, const std::string& prefix) {
+  for (const auto& [key, value] : {std::pair<std::string, std::string>{"{test}", test}, {"{bus}", bus}, {"{prefix}", prefix}}) {
+    for (std::size_t at = a.find(key); at != std::string::npos; at = a.find(key, at + value.size())) a.replace(at, key.size(), value);
+  }
+  return a;
+}
+
 bool make_dir(const std::string& dir, std::string& error) {
   std::error_code ec;
   fs::create_directories(dir, ec);
@@ -214,11 +270,13 @@ int cmd_test(const std::vector<std::string>& args) {
   if (wants_help(args)) return out(kTestHelp) ? 0 : 1;
   std::vector<std::string> paths, sets;
   std::string out_dir = "out/test", junit;
+  BusOptions bus;
   int jobs = 1;
   bool quiet = false;
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
-    if ((a == "--out" || a == "--junit" || a == "--set" || a == "-j") && i + 1 >= args.size()) {
+    if ((a == "--out" || a == "--junit" || a == "--set" || a == "-j" || a == "--bus" || a == "--ecu-cmd") &&
+        i + 1 >= args.size()) {
       std::cerr << a << " needs a value\n" << kTestHelp;
       return 1;
     }
@@ -239,6 +297,14 @@ int cmd_test(const std::vector<std::string>& args) {
       jobs = static_cast<int>(n);
     } else if (a == "--quiet") {
       quiet = true;
+    } else if (a == "--bus") {
+      if (!bus.parse(args[++i])) {
+        std::cerr << "--bus " << args[i] << ": must be socketcand:HOST:PORT or lcm:URL (lcm:udpm://239.255.76.67:7667?ttl=0)\n";
+        return 1;
+      }
+    } else if (a == "--ecu-cmd") {
+      bus.ecu_cmd.assign(args.begin() + static_cast<std::ptrdiff_t>(i) + 1, args.end());
+      break;
     } else if (!a.empty() && a[0] == '-') {
       std::cerr << "unknown option " << a << "\n" << kTestHelp;
       return 1;
@@ -250,6 +316,12 @@ int cmd_test(const std::vector<std::string>& args) {
     std::cerr << kTestHelp;
     return 1;
   }
+  if (bus.spec.empty() != bus.ecu_cmd.empty()) {
+    std::cerr << "--bus and --ecu-cmd go together: the plant runs on the bus, ehpt starts the ECU there\n";
+    return 1;
+  }
+  bus.enabled = !bus.spec.empty();
+  bus.ecu_is_ehpt = bus.enabled && bus.ecu_cmd[0] == "ehpt";
   std::vector<TestCase> tests;
   std::vector<std::string> errors;
   collect(paths, tests, errors);
@@ -277,62 +349,139 @@ int cmd_test(const std::vector<std::string>& args) {
     return 1;
   }
   const std::string self = io::self_executable();
-  std::size_t next = 0, running = 0, done = 0;
-  std::map<int, std::size_t> children;  // pid -> test
-  std::map<int, std::chrono::steady_clock::time_point> started;
+  // each test a slot (its own bus port or LCM prefix while it runs)
+  std::vector<bool> slot_busy(static_cast<std::size_t>(jobs), false);
+  struct Running {
+    std::size_t test = 0, slot = 0;
+    int plant = -1, ecu = -1;  // pids (-1: none or ended)
+    int plant_status = 0, ecu_status = 0;
+    std::chrono::steady_clock::time_point started, plant_ended;
+  };
+  std::vector<Running> running;
+  std::size_t next = 0, done = 0;
   bool start_failed = false;
-  while (done < tests.size()) {
-    while (g_stop.load() == 0 && running < static_cast<std::size_t>(jobs) && next < tests.size()) {
-      TestCase& t = tests[next];
-      t.out_dir = out_dir + "/" + t.name;
-      t.log_path = out_dir + "/logs/" + t.name + ".log";
-      std::vector<std::string> argv{self, "run", t.path, "--out", t.out_dir, "--quiet"};
-      for (const auto& s : sets) {
-        argv.push_back("--set");
-        argv.push_back(s);
-      }
-      std::string reason;
-      const int pid = io::start_program(argv, t.log_path, t.log_path, true, reason);
-      if (pid < 0) {
+  const auto finish = [&](Running& r) {
+    TestCase& t = tests[r.test];
+    t.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - r.started).count();
+    judge(t, r.plant_status);
+    if (bus.enabled && t.state != TestCase::State::kError) {
+      const bool ecu_ok = WIFEXITED(r.ecu_status) && WEXITSTATUS(r.ecu_status) == 0;
+      if (!ecu_ok) {
         t.state = TestCase::State::kError;
-        t.first_failure = "could not start: " + reason;
-        start_failed = true;
-        ++done;
-      } else {
-        children[pid] = next;
-        started[pid] = std::chrono::steady_clock::now();
-        ++running;
+        t.first_failure = "the ECU " + std::string(WIFEXITED(r.ecu_status) ? "exited with status " + std::to_string(WEXITSTATUS(r.ecu_status))
+                                                                           : "was killed by signal " + std::to_string(WTERMSIG(r.ecu_status)));
+        t.details += "ECU log (" + t.ecu_log_path + "):\n" + log_tail(t.ecu_log_path);
       }
-      ++next;
+    } else if (bus.enabled) {
+      t.details += "ECU log (" + t.ecu_log_path + "):\n" + log_tail(t.ecu_log_path);
     }
-    if (running == 0) {
-      if (g_stop.load() != 0 || next >= tests.size()) break;
-      continue;
-    }
-    int status = 0;
-    const int pid = ::waitpid(-1, &status, 0);
-    if (pid < 0) {
-      if (errno == EINTR) {
-        if (g_stop.load() != 0) {
-          for (const auto& [p, i] : children) ::killpg(p, g_stop.load());
-        }
-        continue;
-      }
-      std::cerr << "error: waitpid: " << std::strerror(errno) << "\n";
-      return 1;
-    }
-    const auto it = children.find(pid);
-    if (it == children.end()) continue;
-    TestCase& t = tests[it->second];
-    t.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started[pid]).count();
-    judge(t, status);
-    children.erase(it);
-    --running;
+    slot_busy[r.slot] = false;
     ++done;
     if (!quiet || t.state != TestCase::State::kPassed) {
       const char* word = t.state == TestCase::State::kPassed ? "passed" : t.state == TestCase::State::kFailed ? "FAILED" : "ERROR";
       std::cerr << "[" << done << "/" << tests.size() << "] " << word << "  " << t.name << "\n";
     }
+  };
+  while (done < tests.size()) {
+    while (g_stop.load() == 0 && running.size() < static_cast<std::size_t>(jobs) && next < tests.size()) {
+      TestCase& t = tests[next];
+      Running r;
+      r.test = next++;
+      r.slot = static_cast<std::size_t>(std::find(slot_busy.begin(), slot_busy.end(), false) - slot_busy.begin());
+      r.started = std::chrono::steady_clock::now();
+      t.out_dir = out_dir + "/" + t.name;
+      t.log_path = out_dir + "/logs/" + t.name + ".log";
+      std::vector<std::string> argv{self, bus.enabled ? "plant" : "run", t.path, "--out", t.out_dir, "--quiet"};
+      std::vector<std::string> ecu_argv;
+      if (bus.enabled) {
+        // lockstep: the plant waits for each command, so the verdict is the same every time
+        const std::string spec = bus.spec_for(r.slot), prefix = bus.prefix_for(r.slot);
+        for (const std::string& a : {std::string("--bus"), spec, std::string("--lockstep"), std::string("--ecu-wait-s"),
+                                     std::string("20")}) {
+          argv.push_back(a);
+        }
+        if (bus.lcm) {
+          argv.push_back("--lcm-prefix");
+          argv.push_back(prefix);
+        }
+        t.ecu_log_path = out_dir + "/logs/" + t.name + ".ecu.log";
+        for (const std::string& a : bus.ecu_cmd) ecu_argv.push_back(substitute(a, t.path, spec, prefix));
+        if (ecu_argv[0] == "ehpt") {
+          ecu_argv[0] = self;
+        } else if (const std::string found = io::find_program(ecu_argv[0]); !found.empty()) {
+          ecu_argv[0] = found;
+        }
+      }
+      for (const auto& x : sets) {
+        argv.push_back("--set");
+        argv.push_back(x);
+        if (bus.enabled && bus.ecu_is_ehpt) {
+          ecu_argv.push_back("--set");  // the built-in ECU reads the same scenario
+          ecu_argv.push_back(x);
+        }
+      }
+      std::string reason;
+      r.plant = io::start_program(argv, t.log_path, t.log_path, true, reason);
+      if (r.plant >= 0 && bus.enabled) {
+        r.ecu = io::start_program(ecu_argv, t.ecu_log_path, t.ecu_log_path, true, reason);
+        if (r.ecu < 0) {
+          ::killpg(r.plant, SIGTERM);
+          int st = 0;
+          ::waitpid(r.plant, &st, 0);
+          r.plant = -1;
+          reason = "the ECU (" + ecu_argv[0] + "): " + reason;
+        }
+      }
+      if (r.plant < 0) {
+        t.state = TestCase::State::kError;
+        t.first_failure = "could not start: " + reason;
+        start_failed = true;
+        ++done;
+        continue;
+      }
+      slot_busy[r.slot] = true;
+      running.push_back(r);
+    }
+    if (running.empty()) {
+      if (g_stop.load() != 0 || next >= tests.size()) break;
+      continue;
+    }
+    // reap what ended; an ECU still running kEcuGrace_s after its plant ended is stopped
+    bool any = false;
+    for (std::size_t i = 0; i < running.size();) {
+      Running& r = running[i];
+      int status = 0;
+      if (r.plant > 0 && ::waitpid(r.plant, &status, WNOHANG) == r.plant) {
+        r.plant_status = status;
+        r.plant = -1;
+        r.plant_ended = std::chrono::steady_clock::now();
+        any = true;
+      }
+      if (r.ecu > 0 && ::waitpid(r.ecu, &status, WNOHANG) == r.ecu) {
+        r.ecu_status = status;
+        r.ecu = -1;
+        any = true;
+      }
+      if (g_stop.load() != 0) {
+        if (r.plant > 0) ::killpg(r.plant, g_stop.load());
+        if (r.ecu > 0) ::killpg(r.ecu, g_stop.load());
+      }
+      if (r.plant < 0 && r.ecu > 0) {
+        const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - r.plant_ended).count();
+        if (waited > kEcuGrace_s + 2.0) {
+          ::killpg(r.ecu, SIGKILL);
+        } else if (waited > kEcuGrace_s) {
+          ::killpg(r.ecu, SIGTERM);
+        }
+      }
+      if (r.plant < 0 && r.ecu < 0) {
+        finish(r);
+        running.erase(running.begin() + static_cast<std::ptrdiff_t>(i));
+        continue;
+      }
+      ++i;
+    }
+    if (!any) ::usleep(2000);
   }
 
   // the table: test, verdict, first failed expectation with its time and value

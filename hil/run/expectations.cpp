@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "hil/run/expectations.hpp"
 
+#include <cstdio>
+
 #include "io/number_format.hpp"
 
 namespace ehpt::hil {
@@ -48,10 +50,18 @@ std::string window_text(const ExpectSpec& e) {
 
 std::string expect_message(const ExpectSpec& e, const ExpectOutcome& o, double step_s) {
   const std::string what = (e.figure.empty() ? e.signal : e.figure) + " " + bound_text(e) + " " + window_text(e);
-  const auto at = [&](std::int64_t n) { return " at t = " + io::number_text(static_cast<double>(n) * step_s) + " s"; };
+  // a grid time as written (332.376, not 332.37600000000003): ten significant digits
+  const auto at = [&](std::int64_t n) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.10g", static_cast<double>(n) * step_s);
+    return std::string(" at t = ") + buf + " s";
+  };
   switch (o.why) {
     case ExpectOutcome::Why::kHeld:
-      return what + ": held" + (o.step >= 0 && e.window != ExpectWindow::kAlways ? at(o.step) : std::string());
+      if (e.window == ExpectWindow::kAlways && o.step >= 0) {  // where it came closest to its bound
+        return what + ": held; closest " + e.signal + " = " + io::number_text(o.value) + at(o.step);
+      }
+      return what + ": held" + (o.step >= 0 ? at(o.step) : std::string());
     case ExpectOutcome::Why::kOutOfBound:
       return what + ": " + (e.figure.empty() ? e.signal : e.figure) + " = " + io::number_text(o.value) +
              (e.other.empty() ? std::string() : ", " + e.other + " = " + io::number_text(o.reference)) +

@@ -57,6 +57,16 @@ inline double bound_violation(const ExpectSpec& e, double x, double reference) {
   return v;
 }
 
+// How far inside the bound x lies (the smallest distance to any of its limits; infinity for
+// none, e.g. a rate limit alone).
+inline double bound_headroom(const ExpectSpec& e, double x, double reference) {
+  double h = std::numeric_limits<double>::infinity();
+  if (e.has_min) h = std::min(h, x - e.min);
+  if (e.has_max) h = std::min(h, e.max - x);
+  if (e.has_near) h = std::min(h, e.tol - std::abs(x - reference));
+  return h;
+}
+
 // A figure at the end of the run.
 ExpectOutcome judge_figure(const ExpectSpec& e, double value);
 // One line for the table, JUnit and summary.json: what was expected and what happened.
@@ -135,6 +145,13 @@ class ExpectationChecker {
         case ExpectWindow::kAtEnd:
           if (!inside) {
             decide(it, false, ExpectOutcome::Why::kOutOfBound, n, x);
+            o.reference = ref;
+          } else if (e.window == ExpectWindow::kAtEnd) {
+            decide(it, true, ExpectOutcome::Why::kHeld, n, x);
+          } else if (const double room = bound_headroom(e, x, ref); room < it.closest) {
+            it.closest = room;  // where a passing window came closest to its bound
+            o.step = n;
+            o.value = x;
             o.reference = ref;
           }
           break;

@@ -124,7 +124,7 @@ class Runner {
     if (pacer_ != nullptr) pacer_->wait_for_step(0);
     begin_faults(0);
     tick_controller(0);
-    actuate(0);
+    if (!external_ecu_) actuate(0);  // an outside ECU's first command is yet to come
     if (external_ecu_) {
       awaiting_command_ = true;  // the caller reads the sensors at t_0 and writes a command first
     } else {
@@ -206,6 +206,7 @@ class Runner {
     run_end_ = end;
     if (awaiting_command_ && !has_port<kPaced>()) {  // the caller's command for this sample is in: the outputs at t_n
       awaiting_command_ = false;
+      actuate(n_);
       observe(n_);
     }
     while (n_ < end && !stopped_by_fault()) {
@@ -236,7 +237,9 @@ class Runner {
       }
       begin_faults(n_);
       tick_controller(n_);
-      actuate(n_);
+      // the sensors of a sample are read with the command in force until then (the built-in
+      // ECU's were, in tick_controller); an outside ECU's command acts once it has come
+      if (!external_ecu_ || n_ % controller_ratio_ != 0) actuate(n_);
       if (external_ecu_ && n_ % controller_ratio_ == 0) {
         // an ECU sample: the outputs at t_n follow with its command (as the built-in ECU's
         // do): from the port's exchange, or back to the caller, who reads the sensors at t_n
@@ -270,10 +273,9 @@ class Runner {
       }
     }
     changed = port_->before_step(n, inputs_) || changed;
-    if (changed) {
-      actuate(n);              // a command fault acts on the command that came
-      dx_observed_step_ = -1;  // taken with the old command
-    }
+    // a command fault acts on the command that came (at a sample step: the one of this sample)
+    if (changed || n % controller_ratio_ == 0) actuate(n);
+    if (changed) dx_observed_step_ = -1;  // taken with the old command
     if (awaiting_command_) {
       awaiting_command_ = false;
       observe(n);

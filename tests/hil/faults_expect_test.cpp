@@ -217,6 +217,40 @@ TEST(CommandFault, AFaultedRunIsTheSameBitForBitEveryTime) {
   EXPECT_NE(a.rows[a.rows.size() - 2], h.rows[h.rows.size() - 1]);  // the final SOC: the noise did something
 }
 
+// An ECU outside the simulation (the Python module, a bus port) and the built-in one are the
+// same discrete-time system under command faults too: the sensors of a sample are read with
+// the command in force until then, whichever ECU computes the next one. A delay, which changes
+// the command the plant gets at every step, is where a difference would show.
+TEST(CommandFault, AnOutsideEcuSeesTheSameFaultedPlantAsTheBuiltInOne) {
+  for (const char* period : {"vehicle.ecu.period_s=0", "vehicle.ecu.period_s=0.01"}) {
+    const std::vector<std::string> sets = {"solver.duration_s=40", period};
+    const std::vector<std::string> faults = {"kind=delay target=driveTauRef_Nm delay_s=0.05 at_s=0",
+                                             "kind=noise target=driveW_rad_s sigma=3 at_s=12 until_s=30"};
+    Scenario sc;
+    std::vector<std::string> errors;
+    ASSERT_TRUE(load_scenario(test::source_path("scenarios/ev_sort1.toml"), sets, faults, sc, errors)) << errors[0];
+    auto built_in = make_simulation(sc, {});
+    while (!built_in->finished()) built_in->run();
+    SimulationOptions opt;
+    opt.external_ecu = true;
+    auto outside = make_simulation(sc, opt);
+    const std::int64_t ratio = sc.solver.ecu_ratio;
+    while (!outside->finished()) {
+      msgs::EvSensors s;
+      ASSERT_TRUE(outside->read_sensors(s));
+      msgs::EvCommand c;
+      c.stamp = s.stamp;
+      c.driveTauRef_Nm = s.driverRequest_Nm;  // what ecu::EvFollower does
+      outside->write_command(c);
+      outside->step(ratio);
+    }
+    const auto a = built_in->outputs(), b = outside->outputs();
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i], b[i]) << period << ": output " << i;
+    EXPECT_GT(b[3], 100.0);  // distance_m: it drove
+  }
+}
+
 // --- expectations: window edges, on time_s itself (its value at step n is n h) ---
 
 fs::path temp_dir() {
@@ -257,6 +291,17 @@ TEST(Expect, AlwaysIsInclusiveAtBothEdgesOfItsWindow) {
   EXPECT_FALSE(v.passed);
   EXPECT_DOUBLE_EQ(v.expectations[0].time_s, 2.001);  // the first step past the bound
   EXPECT_DOUBLE_EQ(v.expectations[0].value, 2.001);
+}
+
+TEST(Expect, AtEndJudgesTheLastStepOnly) {
+  EXPECT_TRUE(passes("signal = \"time_s\"\nvalue = 3\ntol = 0\nwindow = \"at_end\""));
+  EXPECT_FALSE(passes("signal = \"time_s\"\nmax = 2.999\nwindow = \"at_end\""));
+  const TestVerdict v = verdict("[[expect]]\nsignal = \"time_s\"\nmin = -1\nmax = 3.5\n");
+  ASSERT_EQ(v.expectations.size(), 1u);
+  EXPECT_TRUE(v.passed);  // a passing window says where it came closest to its bound
+  EXPECT_DOUBLE_EQ(v.expectations[0].time_s, 3.0);
+  EXPECT_NE(v.expectations[0].message.find("held; closest time_s = 3 at t = 3 s"), std::string::npos)
+      << v.expectations[0].message;
 }
 
 TEST(Expect, EventuallyNeedsOneStepInsideItsWindow) {
