@@ -19,7 +19,7 @@ else()
 endif()
 
 install(TARGETS ehpt RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT runtime)
-install(PROGRAMS tools/plot.py DESTINATION ${CMAKE_INSTALL_LIBEXECDIR}/ehpt COMPONENT runtime)
+install(PROGRAMS tools/plot.py tools/plot_expect.py DESTINATION ${CMAKE_INSTALL_LIBEXECDIR}/ehpt COMPONENT runtime)
 # The installed data: its place is known to the installed code (hil/config/scenario.cpp) and to
 # the CMake package (ehpt_DATA_DIR), relative to the prefix.
 set(EHPT_DATA_INSTALL_DIR ${CMAKE_INSTALL_DATADIR}/ehpt)

@@ -52,6 +52,10 @@ int check_realtime(const RealtimeArgs& rt, const ehpt::hil::Scenario& sc);
 // argument vector), naming them as if in shown_dir. True on success (targets/cmd_plot.cpp).
 bool run_plot_tool(const std::string& src_dir, const std::string& out_dir, const std::string& shown_dir, bool quiet);
 
+// A test run's figures, one per failed expectation (tools/plot_expect.py), into dir; true on
+// success or when nothing failed.
+bool run_expect_figures(const std::string& dir, bool quiet);
+
 // The commands (args without the command word).
 int cmd_run(const std::vector<std::string>& args);      // targets/cmd_run.cpp
 int cmd_plant(const std::vector<std::string>& args);    // targets/cmd_plant_ecu.cpp

@@ -308,6 +308,10 @@ int cmd_plant(const std::vector<std::string>& args) {
   opt.driver = driver.get();
   opt.allow_degraded = a.allow_degraded;
   if (a.rt.realtime) opt.realtime = &a.rt.opt;
+  if (!sc.expects.empty() && sc.output.timeseries) {
+    // a test over the bus: a figure per failed expectation, part of the committed session
+    opt.before_commit = [&](const std::string& dir) { return run_expect_figures(dir, a.quiet); };
+  }
   const ehpt::hil::BatchResult r = ehpt::hil::run_batch(sc, opt, std::cerr);
   if (!a.quiet) {
     for (const auto& w : r.warnings) std::cerr << "warning: " << w << "\n";

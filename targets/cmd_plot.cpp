@@ -129,6 +129,24 @@ bool run_plot_tool(const std::string& src_dir, const std::string& out_dir, const
   return false;
 }
 
+bool run_expect_figures(const std::string& dir, bool quiet) {
+  const std::string tools = ehpt::hil::tools_dir();
+  if (tools.empty()) {
+    std::cerr << "warning: no figures of the failed expectations: the plot tool is not installed (set EHPT_TOOLS_DIR "
+                 "to the folder of plot_expect.py)\n";
+    return true;  // the verdict stands without its figure
+  }
+  const std::string safe = !dir.empty() && dir[0] == '-' ? "./" + dir : dir;
+  std::vector<std::string> argv = {"/usr/bin/python3", tools + "/plot_expect.py", safe, "--quiet"};
+  (void)quiet;  // the figures are named in summary.json's folder; nothing to print
+  std::string reason;
+  const int rc = ehpt::io::run_program(argv, reason);
+  if (rc == 0) return true;
+  std::cerr << "error: the figures of the failed expectations were not drawn ("
+            << (rc < 0 ? "cannot start " + reason : "plot_expect.py exited with " + std::to_string(rc)) << ")\n";
+  return false;
+}
+
 int cmd_plot(const std::vector<std::string>& args) {
   if (wants_help(args) || args.size() != 1) {
     if (args.size() != 1) {

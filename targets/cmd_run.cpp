@@ -125,9 +125,15 @@ int cmd_run(const std::vector<std::string>& args) {
   opt.out_dir = out_dir;
   opt.progress = !quiet && isatty(STDERR_FILENO);
   opt.stop_signal = &g_stop;
-  if (do_plot) {
-    // drawn into the temporary folder, so the figures are part of the committed run
-    opt.before_commit = [&](const std::string& dir) { return run_plot_tool(dir, dir, out_dir, quiet); };
+  const bool expect_figures = !sc.expects.empty() && sc.output.timeseries;
+  if (do_plot || expect_figures) {
+    // drawn into the temporary folder, so the figures are part of the committed run; a test's
+    // failed expectations get a figure each (its summary.json is there already)
+    opt.before_commit = [&, do_plot, expect_figures](const std::string& dir) {
+      bool ok = !do_plot || run_plot_tool(dir, dir, out_dir, quiet);
+      if (expect_figures) ok = run_expect_figures(dir, quiet) && ok;
+      return ok;
+    };
   }
   const ehpt::hil::BatchResult r = ehpt::hil::run_batch(sc, opt, std::cerr);
   if (!quiet) {

@@ -434,7 +434,17 @@ TestVerdict verdict_of(const Scenario& sc, const Report& r) {
         o.step = r.st.steps_done;
       }
     }
-    ExpectLine line{e.name, o.passed, expect_message(e, o, h)};
+    ExpectLine line{e, e.name, o.passed, expect_message(e, o, h)};
+    const double end_s = static_cast<double>(sc.solver.steps) * h;
+    if (e.window == ExpectWindow::kAlways || e.window == ExpectWindow::kEventually) {
+      line.window_from_s = static_cast<double>(first_step_at(e.from_s, h)) * h;
+      line.window_to_s = std::min(end_s, static_cast<double>(std::min(sc.solver.steps, last_step_at(e.to_s, h))) * h);
+    } else if (e.window == ExpectWindow::kWithin && o.event_step >= 0) {
+      line.window_from_s = static_cast<double>(o.event_step) * h;
+      line.window_to_s = std::min(end_s, line.window_from_s + static_cast<double>(last_step_at(e.within_s, h)) * h);
+    } else if (e.window == ExpectWindow::kAtEnd) {
+      line.window_from_s = line.window_to_s = end_s;
+    }
     if (o.step >= 0) line.time_s = static_cast<double>(o.step) * h;
     line.value = o.value;
     if (!o.passed && v.first_failure.empty()) v.first_failure = e.name + ": " + line.message;
@@ -474,6 +484,27 @@ io::JsonObject test_json(const TestVerdict& v) {
     o.text("message", e.message);
     o.number("time_s", e.time_s);
     o.number("value", e.value);
+    o.number("window_from_s", e.window_from_s);
+    o.number("window_to_s", e.window_to_s);
+    io::JsonObject spec;  // what was expected, for a figure or a report of one's own
+    const ExpectSpec& x = e.spec;
+    if (x.figure.empty()) {
+      spec.text("signal", x.signal);
+    } else {
+      spec.text("figure", x.figure);
+    }
+    spec.text("window", expect_window_name(x.window));
+    if (x.has_min) spec.number("min", x.min);
+    if (x.has_max) spec.number("max", x.max);
+    if (x.has_near && x.other.empty()) spec.number("value", x.value);
+    if (!x.other.empty()) spec.text("other", x.other);
+    if (x.has_near) spec.number("tol", x.tol);
+    if (x.has_rate) spec.number("rate_max", x.rate_max);
+    if (!x.after.empty()) {
+      spec.text("after", x.after);
+      spec.number("within_s", x.within_s);
+    }
+    o.object("spec", spec);
     expects.push_back(std::move(o));
   }
   for (const FaultLine& f : v.faults) {

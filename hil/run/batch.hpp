@@ -86,11 +86,15 @@ inline constexpr double kAuditWarnRelative = 1e-3;
 
 // A test's verdict (a scenario with faults or expectations; docs/testing.md).
 struct ExpectLine {
+  ExpectSpec spec;  // as the test states it
   std::string name;
   bool passed = false;
   std::string message;                         // what was expected and what happened
   double time_s = std::numeric_limits<double>::quiet_NaN();  // where it was decided (NaN: nowhere)
   double value = std::numeric_limits<double>::quiet_NaN();
+  // the window it was judged over, in s (NaN: none, e.g. a within whose event never came)
+  double window_from_s = std::numeric_limits<double>::quiet_NaN();
+  double window_to_s = std::numeric_limits<double>::quiet_NaN();
 };
 struct FaultLine {
   std::string name, kind, target;

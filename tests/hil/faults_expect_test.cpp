@@ -247,7 +247,7 @@ TEST(CommandFault, AnOutsideEcuSeesTheSameFaultedPlantAsTheBuiltInOne) {
     const auto a = built_in->outputs(), b = outside->outputs();
     ASSERT_EQ(a.size(), b.size());
     for (std::size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i], b[i]) << period << ": output " << i;
-    EXPECT_GT(b[3], 100.0);  // distance_m: it drove
+    EXPECT_GT(b[3], 50.0);  // distance_m: it drove
   }
 }
 

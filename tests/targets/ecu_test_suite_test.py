@@ -22,7 +22,7 @@ import tempfile
 
 import junitparser
 
-EHPT, SRC = sys.argv[1], sys.argv[2]
+EHPT, SRC = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 failures = []
 
 
@@ -58,6 +58,13 @@ with tempfile.TemporaryDirectory() as tmp:
     bad = [n for n, c in by_name.items() if c.result]
     check(not bad, f"no failure or error in the shipped suite: {bad}")
     check("xfail" in out, "the test written to fail is listed as xfail")
+    xfail_dir = os.path.join(tmp, "suite", "soc_stuck_written_to_fail")
+    check(os.path.exists(os.path.join(xfail_dir, "expect_soc_band.png")),
+          "its failed expectation has its figure (expect_soc_band.png)")
+    check(not any(f.startswith("expect_") for f in os.listdir(os.path.join(tmp, "suite", "soc_sensor_stuck"))),
+          "a test whose expectations held has no expectation figure")
+    with open(os.path.join(xfail_dir, "ehpt-manifest.txt")) as f:
+        check("expect_soc_band.png" in f.read(), "the figure is part of the committed run (its manifest lists it)")
     for name in by_name:
         with open(os.path.join(tmp, "suite", name, "summary.json")) as f:
             v = json.load(f)["test"]["verdict"]
@@ -87,7 +94,7 @@ with tempfile.TemporaryDirectory() as tmp:
     msg = res[0].message if res else ""
     check("engine runs" in msg and "never held" in msg and "closest iceON = 0" in msg and "t = " in msg,
           f"the failure names the expectation, its value and time: {msg}")
-    check("no_start" not in msg or True, "")
+    check(os.path.exists(os.path.join(tmp, "two", "fail", "expect_engine_runs.png")), "the failed expectation's figure")
     rc, out, err = run(["test", stop, "--out", os.path.join(tmp, "stop"), "--junit", os.path.join(tmp, "stop.xml")])
     check(rc == 3, f"a test stopped by a plant fault exits 3 (exit {rc})")
     _, st = cases(os.path.join(tmp, "stop.xml"))
@@ -95,7 +102,7 @@ with tempfile.TemporaryDirectory() as tmp:
     check(len(r) == 1 and isinstance(r[0], junitparser.Error) and "plant fault" in (r[0].message or ""),
           f"... and is a JUnit <error> naming the plant fault: {r[0].message if r else None}")
     rc, out, err = run(["test", good, typo, "--out", os.path.join(tmp, "typo")])
-    check(rc == 2 and "typo.toml:4" in err and 'did you mean "stuck"' in err, f"a typo: exit 2, file:line, a hint ({rc}: {err})")
+    check(rc == 2 and "typo.toml:5" in err and 'did you mean "stuck"' in err, f"a typo: exit 2, file:line, a hint ({rc}: {err})")
     check(not os.path.exists(os.path.join(tmp, "typo", "good")), "... and nothing ran")
 
 print("ok" if not failures else f"{len(failures)} check(s) failed")

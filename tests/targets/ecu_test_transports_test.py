@@ -21,7 +21,7 @@ import subprocess
 import sys
 import tempfile
 
-EHPT, SRC = sys.argv[1], sys.argv[2]
+EHPT, SRC = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 if os.environ.get("EHPT_IN_NETNS") != "1":
     print("skipped: run me through tests/targets/in_netns.sh (LCM udpm stays in a private namespace)")
     sys.exit(77)
