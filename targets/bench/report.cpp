@@ -6,6 +6,19 @@
 
 namespace ehpt::bench {
 
+// What an ECU test adds to a psecu2 rk4 step: (test - plain) / plain of the median ns per
+// step, NaN if either did not run.
+double test_overhead(const Bench& b) {
+  const SpeedRun *plain = nullptr, *test = nullptr;
+  for (const auto& r : b.speed) {
+    if (!r.error.empty() || r.solver != "rk4") continue;
+    if (r.scenario == "psecu2_nedc") plain = &r;
+    if (r.scenario == kTestRow) test = &r;
+  }
+  if (plain == nullptr || test == nullptr) return NAN;
+  return (test->ns_per_step.median - plain->ns_per_step.median) / plain->ns_per_step.median;
+}
+
 struct Group {
   std::string name, meaning;
   std::vector<std::string> members;
@@ -93,6 +106,10 @@ std::string report_text(const Bench& b) {
   }
   s += table({"vehicle", "solver", "sim s", "ns/step", "min..max", "target", "x real time", "IE/RK4", "target", ""}, rows,
              "llrrrrrrrl");
+  if (const double f = test_overhead(b); std::isfinite(f)) {
+    s += "  an ECU test (a fault, four expectations at every step) costs " + fmt("%.1f", 100.0 * f) +
+         " % of a psecu2_nedc rk4 step (target <= 10 %)\n";
+  }
   if (b.speed_status != "ok") s += "  " + b.speed_status + "\n";
 
   // (c)
@@ -367,6 +384,8 @@ std::string report_json(const Bench& b) {
     by_vehicle.object(v, o);
   }
   speed.object("vehicles", by_vehicle);
+  speed.number("test_overhead_fraction", test_overhead(b));  // (test - plain) / plain, psecu2 rk4
+  speed.number("target_test_overhead_fraction", 0.10);
   j.object("speed", speed);
 
   JsonObject lat;

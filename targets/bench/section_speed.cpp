@@ -7,6 +7,36 @@ namespace ehpt::bench {
 
 namespace {
 
+// psecu2 on NEDC as an ECU test: one sensor fault, four expectations at every step (the
+// shipped soc_sensor_stuck test's shape, over the whole cycle).
+constexpr const char* kPsecu2Test = R"(description = "ehpt bench: what a test costs"
+scenario = "psecu2_nedc"
+[[fault]]
+kind = "stuck"
+target = "batSOC"
+at_s = 100
+[[expect]]
+signal = "soc"
+min = 0.3
+max = 0.9
+[[expect]]
+signal = "speed_m_s"
+other = "speed_ref_m_s"
+tol = 3.0
+from_s = 5
+[[expect]]
+signal = "iceW_rad_s"
+max = 600
+[[expect]]
+signal = "soc"
+min = 0.3
+window = "at_end"
+)";
+
+}  // namespace
+
+namespace {
+
 SpeedRun measure_speed(const std::string& scenario, const std::string& solver, double duration_s, int reps) {
   SpeedRun r;
   r.scenario = scenario;
@@ -78,6 +108,24 @@ void section_speed(Bench& b) {
       b.speed.push_back(r);
     }
   }
+  // what an ECU test costs: psecu2 with a fault and four expectations judged at every step,
+  // next to the plain psecu2 above (this process, the same repetitions; docs/testing.md)
+  if (stopping()) return;
+  const std::string file = b.dir + "/psecu2_test.toml";
+  std::string why;
+  if (!ehpt::io::write_file_atomically(file, kPsecu2Test, why)) {
+    SpeedRun failed;
+    failed.scenario = kTestRow;
+    failed.solver = "rk4";
+    failed.error = "cannot write " + file + ": " + why;
+    b.speed.push_back(failed);
+    b.any_failed = true;
+    return;
+  }
+  SpeedRun r = measure_speed(file, "rk4", 0.0, b.reps);
+  r.scenario = kTestRow;
+  if (!r.error.empty()) b.any_failed = true;
+  b.speed.push_back(r);
   b.speed_status = "ok";
 }
 

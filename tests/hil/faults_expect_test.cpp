@@ -207,6 +207,19 @@ TEST(CommandFault, NoStartKeepsTheEngineOffAndLossZeroesTheMotor) {
   EXPECT_NE(loss.rows[17000 * 2 + 20], 0.0);  // the ECU's command again after until_s
 }
 
+// A triggered command fault acts from the step after its condition first held, to the step.
+TEST(CommandFault, WhenActsFromTheStepAfterItsConditionFirstHeld) {
+  const auto f = psecu2({"kind=fixed target=motTauRef_Nm value=0 when=\"time_s>=5\""}, {"time_s", "motTauRef_Nm"}, 8);
+  const std::size_t w = f.columns.size();
+  ASSERT_EQ(w, 3u);
+  for (std::size_t r = 0; r < f.rows.size() / w; ++r) {
+    ASSERT_EQ(f.rows[r * w + 2], r >= 5001 ? 1.0 : 0.0) << "step " << r;  // time_s >= 5 first at step 5000
+    if (r >= 5001) {
+      ASSERT_EQ(f.rows[r * w + 1], 0.0) << "step " << r;
+    }
+  }
+}
+
 TEST(CommandFault, AFaultedRunIsTheSameBitForBitEveryTime) {
   const std::vector<std::string> fault = {"kind=noise target=motTauRef_Nm sigma=20 seed=3 at_s=2"};
   const auto a = psecu2(fault, {"speed_m_s", "soc"});
@@ -225,7 +238,9 @@ TEST(CommandFault, AnOutsideEcuSeesTheSameFaultedPlantAsTheBuiltInOne) {
   for (const char* period : {"vehicle.ecu.period_s=0", "vehicle.ecu.period_s=0.01"}) {
     const std::vector<std::string> sets = {"solver.duration_s=40", period};
     const std::vector<std::string> faults = {"kind=delay target=driveTauRef_Nm delay_s=0.05 at_s=0",
-                                             "kind=noise target=driveW_rad_s sigma=3 at_s=12 until_s=30"};
+                                             "kind=noise target=driveW_rad_s sigma=3 at_s=12 until_s=30",
+                                             // what the follower reads: a sample taken before the fault began would show
+                                             "kind=offset target=driverRequest_Nm offset=15 at_s=12 until_s=30"};
     Scenario sc;
     std::vector<std::string> errors;
     ASSERT_TRUE(load_scenario(test::source_path("scenarios/ev_sort1.toml"), sets, faults, sc, errors)) << errors[0];
