@@ -92,6 +92,14 @@ class ExpectationChecker {
       it.spec = &e;
       it.index = static_cast<std::size_t>(&e - specs.data());
       it.signal = member(e.signal);
+      it.window = e.window;
+      if (e.has_min) it.lo = e.min;
+      if (e.has_max) it.hi = e.max;
+      it.near = e.has_near;
+      it.value = e.value;
+      it.tol = e.tol;
+      it.rate = e.has_rate;
+      it.rate_max = e.rate_max;
       it.other = e.other.empty() ? nullptr : member(e.other);
       it.from = e.window == ExpectWindow::kAtEnd ? total_ : first_step_at(e.from_s, h_s_);
       it.to = e.window == ExpectWindow::kAtEnd ? total_ : std::min(total_, last_step_at(e.to_s, h_s_));
@@ -112,9 +120,10 @@ class ExpectationChecker {
   void observe(std::int64_t n, const Outputs& y, std::span<const FaultSpan> faults) {
     last_n_ = n;
     for (Item& it : items_) {
-      const ExpectSpec& e = *it.spec;
+      if (it.decided) continue;  // a failed always-window, a window that held: nothing more to see
       ExpectOutcome& o = it.outcome;
-      if (e.window == ExpectWindow::kWithin && o.event_step < 0) {
+      if (it.window == ExpectWindow::kWithin && o.event_step < 0) {
+        const ExpectSpec& e = *it.spec;
         bool event = false;
         if (e.after_fault >= 0) {
           const FaultSpan& f = faults[static_cast<std::size_t>(e.after_fault)];
@@ -129,43 +138,45 @@ class ExpectationChecker {
         }
       }
       const double x = y.*it.signal;
-      if (e.has_rate) {
-        if (n > it.from && n <= it.to && !it.decided) {
+      if (it.rate) {
+        if (n > it.from && n <= it.to) {
           const double rate = std::abs(x - it.previous) / h_s_;
-          if (!(rate <= e.rate_max)) decide(it, false, ExpectOutcome::Why::kRate, n, rate);
+          if (!(rate <= it.rate_max)) {
+            decide(it, false, ExpectOutcome::Why::kRate, n, rate);
+            continue;
+          }
         }
         it.previous = x;
       }
-      if (n < it.from || n > it.to || it.decided) continue;
-      const double ref = it.other != nullptr ? y.*it.other : e.value;
-      const double violation = bound_violation(e, x, ref);
-      const bool inside = violation == 0.0;
-      switch (e.window) {
-        case ExpectWindow::kAlways:
-        case ExpectWindow::kAtEnd:
-          if (!inside) {
-            decide(it, false, ExpectOutcome::Why::kOutOfBound, n, x);
-            o.reference = ref;
-          } else if (e.window == ExpectWindow::kAtEnd) {
-            decide(it, true, ExpectOutcome::Why::kHeld, n, x);
-          } else if (const double room = bound_headroom(e, x, ref); room < it.closest) {
-            it.closest = room;  // where a passing window came closest to its bound
-            o.step = n;
-            o.value = x;
-            o.reference = ref;
-          }
-          break;
-        case ExpectWindow::kEventually:
-        case ExpectWindow::kWithin:
-          if (inside) {
-            decide(it, true, ExpectOutcome::Why::kHeld, n, x);
-          } else if (violation < it.closest) {
-            it.closest = violation;
-            o.step = n;
-            o.value = x;
-            o.reference = ref;
-          }
-          break;
+      if (n < it.from || n > it.to) continue;
+      const double ref = it.other != nullptr ? y.*it.other : it.value;
+      // lo, hi: min and max, or infinities; a NaN is outside every bound
+      const bool inside = x >= it.lo && x <= it.hi && (!it.near || std::abs(x - ref) <= it.tol);
+      if (it.window == ExpectWindow::kAlways) {
+        if (!inside) {
+          decide(it, false, ExpectOutcome::Why::kOutOfBound, n, x);
+          o.reference = ref;
+          continue;
+        }
+        // where a passing window came closest to its bound
+        double room = std::min(x - it.lo, it.hi - x);
+        if (it.near) room = std::min(room, it.tol - std::abs(x - ref));
+        if (room < it.closest) {
+          it.closest = room;
+          o.step = n;
+          o.value = x;
+          o.reference = ref;
+        }
+      } else if (it.window == ExpectWindow::kAtEnd) {
+        decide(it, inside, inside ? ExpectOutcome::Why::kHeld : ExpectOutcome::Why::kOutOfBound, n, x);
+        o.reference = ref;
+      } else if (inside) {  // eventually, within
+        decide(it, true, ExpectOutcome::Why::kHeld, n, x);
+      } else if (const double violation = bound_violation(*it.spec, x, ref); violation < it.closest) {
+        it.closest = violation;
+        o.step = n;
+        o.value = x;
+        o.reference = ref;
       }
     }
   }
@@ -204,6 +215,11 @@ class ExpectationChecker {
     double Outputs::*signal = nullptr;
     double Outputs::*other = nullptr;
     CompiledCondition<Outputs> condition;
+    // the spec's bound and window, copied for the step loop
+    ExpectWindow window = ExpectWindow::kAlways;
+    double lo = -std::numeric_limits<double>::infinity(), hi = std::numeric_limits<double>::infinity();
+    bool near = false, rate = false;
+    double value = 0.0, tol = 0.0, rate_max = 0.0;
     std::int64_t from = 0, to = 0, width = 0;
     bool decided = false;
     double previous = 0.0;

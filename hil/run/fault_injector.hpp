@@ -91,7 +91,8 @@ struct SensorsOf<Plant> {
   using type = typename Plant::Sensors;
 };
 
-// When a fault acted: its first and last grid point (-1: never), and how many.
+// When a fault acted: its first and last grid point (-1: never), and how many (the last two
+// complete at the end: FaultInjector::final_spans).
 struct FaultSpan {
   std::int64_t first_step = -1, last_step = -1, steps = 0;
   std::int64_t end_step = -1;  // the first grid point after it stopped acting for good (-1: it did not)
@@ -167,25 +168,53 @@ class FaultInjector {
   // Run phase: which faults act at grid point n (called once per n, in order, before the
   // samples and commands of n). Returns the bits of those acting.
   unsigned begin_step(std::int64_t n) {
+    last_begun_ = n;
+    if (n < next_change_) return mask_;  // nothing starts or stops before next_change_
     unsigned mask = 0;
+    std::int64_t next = kNever;
     for (std::size_t i = 0; i < faults_.size(); ++i) {
       Fault& f = faults_[i];
       bool on = n >= f.start && n < f.until;
       if (on && f.period_steps > 0) on = (n - f.start) % f.period_steps < f.on_steps;
       FaultSpan& sp = spans_[i];
-      if (on) {
+      if (on && !f.active) {  // a span begins
         if (sp.first_step < 0) sp.first_step = n;
-        sp.last_step = n;
-        ++sp.steps;
-        mask |= f.bit;
+        f.span_start = n;
+      } else if (!on && f.active) {  // it ends
+        sp.steps += n - f.span_start;
+        sp.last_step = n - 1;
       }
       // its end: the first grid point past its window, once it has acted
       if (n >= f.until && sp.first_step >= 0 && sp.end_step < 0) sp.end_step = n;
       if (!on) f.holding = false;
       f.active = on;
+      if (on) mask |= f.bit;
+      // where this fault changes next
+      if (n < f.start) {
+        next = std::min(next, f.start);  // (kNever for a trigger not yet fired: observe() says)
+      } else if (n < f.until) {
+        std::int64_t change = f.until;
+        if (f.period_steps > 0) {
+          const std::int64_t phase = (n - f.start) % f.period_steps;
+          change = std::min(change, n - phase + (phase < f.on_steps ? f.on_steps : f.period_steps));
+        }
+        next = std::min(next, change);
+      }
     }
+    next_change_ = next;
     mask_ = mask;
     return mask;
+  }
+  // The spans at the end: those still acting close at the last grid point begun.
+  std::vector<FaultSpan> final_spans() const {
+    std::vector<FaultSpan> out = spans_;
+    for (std::size_t i = 0; i < faults_.size(); ++i) {
+      if (faults_[i].active) {
+        out[i].steps += last_begun_ - faults_[i].span_start + 1;
+        out[i].last_step = last_begun_;
+      }
+    }
+    return out;
   }
   unsigned mask() const { return mask_; }
 
@@ -193,7 +222,10 @@ class FaultInjector {
   void observe(std::int64_t n, const Outputs& y) {
     if (!triggers_) return;
     for (Fault& f : faults_) {
-      if (f.spec.has_when && f.start == kNever && f.when.holds(y)) f.start = n + 1;
+      if (f.spec.has_when && f.start == kNever && f.when.holds(y)) {
+        f.start = n + 1;
+        next_change_ = std::min(next_change_, f.start);
+      }
     }
   }
 
@@ -243,6 +275,7 @@ class FaultInjector {
     std::int64_t start = 0, until = 0;
     CompiledCondition<Outputs> when;
     bool active = false, holding = false;
+    std::int64_t span_start = 0;  // where its current span began (while active)
     double held = 0.0;
     std::int64_t hold_n = -1;
     NoiseSource noise;
@@ -313,6 +346,8 @@ class FaultInjector {
   std::vector<Fault> faults_;
   std::vector<FaultSpan> spans_;
   unsigned mask_ = 0;
+  std::int64_t next_change_ = 0;   // the next grid point where a fault may start or stop
+  std::int64_t last_begun_ = -1;   // the last grid point begin_step saw
   bool commands_ = false, triggers_ = false;
 };
 

@@ -73,7 +73,7 @@ class SimulationOf final : public Simulation {
 
   TestRecord test_record() override {
     TestRecord t;
-    t.faults.assign(faults_->spans().begin(), faults_->spans().end());
+    t.faults = faults_->final_spans();
     const auto o = checks_->finish();
     t.outcomes.assign(o.begin(), o.end());
     return t;
