@@ -469,7 +469,8 @@ std::optional<hil::CycleArrays> cycle_of(const py::object& cycle) {
 // text, turned into an ehpt.Error by the caller.
 // name_error: the name itself is the problem (no such scenario), errors holds that one message.
 bool load(const std::string& name, const std::vector<std::string>& overrides, const std::optional<hil::CycleArrays>& cycle,
-          hil::Scenario& sc, std::vector<std::string>& errors, bool& name_error) {
+          hil::Scenario& sc, std::vector<std::string>& errors, bool& name_error,
+          const std::vector<std::string>& faults = {}) {
   // a C string would end at a NUL: "ev_nedc.toml\0junk" must not run ev_nedc.toml
   if (name.find('\0') != std::string::npos) {
     errors.push_back("the scenario name contains a NUL character");
@@ -483,8 +484,32 @@ bool load(const std::string& name, const std::vector<std::string>& overrides, co
     name_error = true;
     return false;
   }
+  if (cycle && !faults.empty()) {
+    errors.push_back("faults and cycle arrays together are not supported yet: put the faults in a test file's "
+                     "[[fault]] tables, or give the cycle as a file");
+    return false;
+  }
   return cycle ? hil::load_scenario_with_cycle(path, overrides, *cycle, sc, errors)
-               : hil::load_scenario(path, overrides, sc, errors);
+               : hil::load_scenario(path, overrides, faults, sc, errors);
+}
+
+// faults=None or a list of str, each as `ehpt run --fault` takes it ("kind=stuck target=batSOC
+// at_s=300"); anything else is a TypeError naming the argument.
+std::vector<std::string> faults_of(const py::object& faults, const char* where) {
+  std::vector<std::string> out;
+  if (faults.is_none()) return out;
+  if (!py::isinstance<py::list>(faults) && !py::isinstance<py::tuple>(faults)) {
+    throw py::type_error(std::string(where) + ": faults must be None or a list of str such as "
+                         "[\"kind=stuck target=batSOC at_s=300\"], got " + py::str(faults.get_type().attr("__name__")).cast<std::string>());
+  }
+  for (const py::handle f : faults) {
+    if (!py::isinstance<py::str>(f)) {
+      throw py::type_error(std::string(where) + ": every fault is a str (key=value pairs, as ehpt run --fault), got " +
+                           py::str(f.get_type().attr("__name__")).cast<std::string>());
+    }
+    out.push_back(f.cast<std::string>());
+  }
+  return out;
 }
 
 // ---- results -------------------------------------------------------------------------------
@@ -539,9 +564,10 @@ struct RunResult {
   py::str text;           // the lines `ehpt run` prints
 };
 
-RunResult run(const ScenarioArg& scenario_arg, const SetArg& set, const CycleArg& cycle_arg) {
+RunResult run(const ScenarioArg& scenario_arg, const SetArg& set, const CycleArg& cycle_arg, const py::object& faults_arg) {
   const std::string scenario = scenario_of(scenario_arg, "run()");
   const std::vector<std::string> overrides = overrides_of(set);
+  const std::vector<std::string> faults = faults_of(faults_arg, "run()");
   const std::optional<hil::CycleArrays> cycle = cycle_of(cycle_arg);
   hil::Scenario sc;
   std::vector<std::string> errors;
@@ -549,7 +575,7 @@ RunResult run(const ScenarioArg& scenario_arg, const SetArg& set, const CycleArg
   bool loaded = false, name_error = false;
   {
     py::gil_scoped_release released;
-    loaded = load(scenario, overrides, cycle, sc, errors, name_error);
+    loaded = load(scenario, overrides, cycle, sc, errors, name_error, faults);
     if (loaded) mr = hil::run_in_memory(sc);
   }
   if (!loaded) throw_load_errors(scenario, errors, overrides, name_error);
@@ -776,7 +802,7 @@ enum class Family { kNone, kPsd, kEv };
 class PySimulation {
  public:
   PySimulation(const ScenarioArg& scenario_arg, const SetArg& set, const BoolArg& external_ecu,
-               const IntArg& chunk_steps_arg, const CycleArg& cycle_arg)
+               const IntArg& chunk_steps_arg, const CycleArg& cycle_arg, const py::object& faults_arg)
       : external_(bool_of(external_ecu, "Simulation(): external_ecu")) {
     const std::string scenario = scenario_of(scenario_arg, "Simulation()");
     // the row buffer holds chunk_steps rows of every column: bounded, so that a typo cannot ask
@@ -791,11 +817,12 @@ class PySimulation {
     }
     const std::vector<std::string> overrides = overrides_of(set);
     const std::optional<hil::CycleArrays> cycle = cycle_of(cycle_arg);
+    const std::vector<std::string> faults = faults_of(faults_arg, "Simulation()");
     std::vector<std::string> errors;
     bool loaded = false, name_error = false;
     {
       py::gil_scoped_release released;
-      loaded = load(scenario, overrides, cycle, sc_, errors, name_error);
+      loaded = load(scenario, overrides, cycle, sc_, errors, name_error, faults);
     }
     if (!loaded) throw_load_errors(scenario, errors, overrides, name_error);
     family_ = sc_.ecu.holds<ecu::PsdEcuParams>()     ? Family::kPsd
@@ -819,6 +846,7 @@ class PySimulation {
     sim_ = hil::make_simulation(sc_, opt);
     for (const auto& s : sim_->signals()) signal_names_.emplace_back(s.name);
     for (const int c : columns_) column_names_.push_back(signal_names_[static_cast<std::size_t>(c)]);
+    if (!sc_.faults.empty()) column_names_.emplace_back("faults_active");  // the recorder's last column
     chunk_steps_ = chunk_steps;
   }
 
@@ -990,6 +1018,11 @@ Arguments:
             {"vehicle.ecu.soc_ref": 0.62, "solver.duration_s": 100}). Values: bool, int,
             float (sent as its repr, the shortest text that reads back the same), str (stays
             a string) or a list of them.
+  faults    None, or a list of faults, each as `ehpt run --fault` takes it:
+            ["kind=stuck target=batSOC at_s=300"] (docs/testing.md); they add to the file's
+            [[fault]] tables. A test file's [[expect]] verdict is summary["test"]
+            (verdict, expectations with message, time and value), exit_code 5 if one failed;
+            timeseries gets a faults_active column.
   cycle     None (the scenario's cycle file), or a pair (t_s, v_m_s) of 1-D arrays of the
             same length: time in s (non-decreasing, >= 2 points) and speed in m/s (finite,
             >= 0, < 200), in place of the scenario's cycle file and checked by the same rules;
@@ -1029,6 +1062,9 @@ Arguments:
                 that many rows (ValueError outside).
   cycle         None, or a pair (t_s, v_m_s) of 1-D arrays (time in s, speed in m/s) in place
                 of the scenario's cycle file, as for ehpt.run.
+  faults        None, or a list of faults as for ehpt.run (["kind=offset target=batSOC
+                offset=0.05 at_s=10"]): read_sensors() returns the faulted sensors, the plant
+                gets the faulted commands; timeseries() gets a faults_active column.
 
 Raises:
   ehpt.Error when the scenario does not load (as ehpt.run); TypeError for an argument of the
@@ -1089,12 +1125,14 @@ PYBIND11_MODULE(ehpt, m) {
                " columns>";
       });
 
-  m.def("run", &run, py::arg("scenario"), py::arg("set") = py::none(), py::arg("cycle") = py::none(), kRunDoc);
+  m.def("run", &run, py::arg("scenario"), py::arg("set") = py::none(), py::arg("cycle") = py::none(),
+        py::arg("faults") = py::none(), kRunDoc);
 
   py::class_<PySimulation>(m, "Simulation", kSimulationDoc)
-      .def(py::init<const ScenarioArg&, const SetArg&, const BoolArg&, const IntArg&, const CycleArg&>(),
+      .def(py::init<const ScenarioArg&, const SetArg&, const BoolArg&, const IntArg&, const CycleArg&, const py::object&>(),
            py::arg("scenario"), py::arg("set") = py::none(), py::arg("external_ecu") = false,
-           py::arg("chunk_steps") = 50000, py::arg("cycle") = py::none(), kSimulationInitDoc)
+           py::arg("chunk_steps") = 50000, py::arg("cycle") = py::none(), py::arg("faults") = py::none(),
+           kSimulationInitDoc)
       .def("step", &PySimulation::step, py::arg("n"),
            "Up to n steps (1 <= n <= chunk_steps, else ValueError); with external_ecu it stops early at\n"
            "an ECU sample. Returns the steps taken (0 once finished). Releases the GIL.")

@@ -10,7 +10,7 @@ packages=(cmake make g++ libeigen3-dev libgtest-dev libbenchmark-dev libtomlplus
           python3-matplotlib python3-numpy python3-pandas python3-can can-utils
           liblcm-dev liblcm-bin libglib2.0-dev iproute2 libsundials-dev rt-tests
           pybind11-dev python3-dev dpkg-dev file mkdocs python3-canmatrix
-          python3-junitparser  # ehpt test's JUnit file read back (ctest ecu_test_suite)
+          python3-junitparser python3-pytest  # ehpt test's JUnit read back; the pytest example
           help2man lintian man-db)  # the man page, the package check (docs/packaging.md)
 
 "$here/tools/apt_install.sh" "ehpt setup" "${packages[@]}"
