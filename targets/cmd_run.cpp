@@ -148,6 +148,10 @@ int cmd_run(const std::vector<std::string>& args) {
     }
     printed = out(text);
   }
+  if (quiet && r.exit_code == ehpt::hil::kExitExpectationFailed) {
+    // the one line a quiet run says about its exit 5 (a sweep's message, an ehpt test log)
+    std::cerr << "test failed: " << r.test.first_failure << "\n";
+  }
   if (r.exit_code != 0) return r.exit_code;
   return printed && !r.after_failed ? 0 : 1;
 }

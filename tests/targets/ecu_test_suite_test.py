@@ -101,6 +101,18 @@ with tempfile.TemporaryDirectory() as tmp:
     r = st["plantfault"].result
     check(len(r) == 1 and isinstance(r[0], junitparser.Error) and "plant fault" in (r[0].message or ""),
           f"... and is a JUnit <error> naming the plant fault: {r[0].message if r else None}")
+    # a campaign of test files: the verdict lands in results.csv
+    camp = os.path.join(tmp, "camp.toml")
+    open(camp, "w").write(f'scenarios = ["{good}", "{fail}"]\n[grid]\n"vehicle.ecu.soc_ref" = [0.6]\n')
+    rc, out, err = run(["sweep", camp, "--out", os.path.join(tmp, "camp"), "-j", "2", "--quiet"])
+    import csv
+    with open(os.path.join(tmp, "camp", "results.csv")) as f:
+        rows = {r["scenario"]: r for r in csv.DictReader(f)}
+    check(rows["good"]["sweep_status"] == "ok" and rows["good"]["test.verdict"] == "passed",
+          f"sweep: the passing test is ok, verdict passed ({rows['good']['sweep_status']}, {rows['good']['test.verdict']})")
+    check(rows["fail"]["sweep_status"] == "failed" and rows["fail"]["exit_code"] == "5" and
+          rows["fail"]["test.verdict"] == "failed" and rows["fail"]["message"].startswith("test failed: engine runs"),
+          f"sweep: the failing test is failed, exit 5, its first failure the message ({rows['fail']['message'][:80]})")
     rc, out, err = run(["test", good, typo, "--out", os.path.join(tmp, "typo")])
     check(rc == 2 and "typo.toml:5" in err and 'did you mean "stuck"' in err, f"a typo: exit 2, file:line, a hint ({rc}: {err})")
     check(not os.path.exists(os.path.join(tmp, "typo", "good")), "... and nothing ran")
