@@ -6,7 +6,9 @@
 #include <sstream>
 #include <system_error>
 
+#include "hil/diag/provenance.hpp"
 #include "io/json_value.hpp"
+#include "io/sha256.hpp"
 #include "io/json_writer.hpp"
 #include "io/output_dir.hpp"
 #include "io/text_file.hpp"
@@ -14,6 +16,28 @@
 namespace fs = std::filesystem;
 
 namespace ehpt::hil {
+
+namespace {
+
+// The build that runs a sweep's runs, as sweep.json records it: run ids are made of the
+// inputs alone, so a resume with another binary would merge its results with the first's.
+std::string this_build() {
+  const BuildInfo& b = build_info();
+  return std::string(b.version) + " (" + (b.git.empty() ? std::string("not from git") : std::string(b.git)) + ", " +
+         std::string(b.compiler) + ", " + std::string(b.build_type) + ", flags sha256 " +
+         io::sha256_hex(std::string(b.flags)).substr(0, 16) + ")";
+}
+
+std::string build_of(const std::string& dir) {
+  std::string text, reason, error;
+  io::JsonValue v;
+  if (!io::read_text_file(dir + "/sweep.json", text, reason) || !io::parse_json(text, v, error)) return "";
+  const io::JsonValue* b = v.find("build");
+  return b != nullptr && b->kind == io::JsonValue::Kind::kString ? b->text : "";
+}
+
+}  // namespace
+
 // Reads "campaign" from DIR/sweep.json; false if DIR has no sweep.json (or it is not ours).
 bool sweep_campaign_of(const std::string& dir, std::string& campaign, std::string& why) {
   std::string text, reason;
@@ -84,6 +108,14 @@ bool open_sweep_folder(const std::string& dir, const std::string& campaign, std:
         error = dir + " holds the sweep of another campaign (" + theirs + "); give another --out";
         return false;
       }
+      const std::string started_by = build_of(dir);
+      if (started_by != this_build()) {
+        error = dir + " holds runs of another ehpt build (" +
+                (started_by.empty() ? std::string("an older ehpt that did not record its build") : started_by) +
+                "; this one is " + this_build() + "): resuming would merge its results with this build's under the "
+                "same run ids. Give another --out (or resume it with the build that started it)";
+        return false;
+      }
     } else if (!fs::is_empty(dir, ec)) {
       std::string names;
       int shown = 0;
@@ -97,6 +129,7 @@ bool open_sweep_folder(const std::string& dir, const std::string& campaign, std:
       io::JsonObject j;
       j.text("format", kSweepFormat);
       j.text("campaign", campaign);
+      j.text("build", this_build());
       if (!io::write_file_atomically(dir + "/sweep.json", j.str() + "\n", error)) return false;
     }
   } else {
@@ -107,6 +140,7 @@ bool open_sweep_folder(const std::string& dir, const std::string& campaign, std:
     io::JsonObject j;
     j.text("format", kSweepFormat);
     j.text("campaign", campaign);
+    j.text("build", this_build());
     if (!io::write_file_atomically(dir + "/sweep.json", j.str() + "\n", error)) return false;
   }
   return make_subfolders(dir, {"runs", "status", "logs"}, error);

@@ -421,5 +421,79 @@ TEST(ExpectRules, EachImpossibleExpectationIsALoadErrorWithItsLine) {
   has(first_error("[[expect]]\nsignal = \"time_s\"\nrate_max = 1\nwindow = \"eventually\"\n"), "a rate limit holds always");
 }
 
+// Every other rule of [[fault]], [[expect]], --fault and a test file's scenario = ..., one each
+// (docs/validation-rules.md: each planted, each caught).
+bool any_error(const std::string& tables, const std::string& what, const std::vector<std::string>& faults = {},
+               const char* base = "scenarios/ev_nedc.toml") {
+  const fs::path file = temp_dir() / "t.toml";
+  std::ofstream(file) << "scenario = \"" << test::source_path(base) << "\"\n[solver]\nduration_s = 3\n" << tables;
+  Scenario sc;
+  std::vector<std::string> errors;
+  load_scenario(file.string(), {}, faults, sc, errors);
+  for (const auto& e : errors) {
+    if (e.find(what) != std::string::npos) return true;
+  }
+  ADD_FAILURE() << "no error with \"" << what << "\"; got " << (errors.empty() ? "none" : errors[0]);
+  return false;
+}
+
+TEST(FaultRules, EveryOtherFaultRule) {
+  const std::string f = "[[fault]]\nkind = \"stuck\"\ntarget = \"speed_m_s\"\n";
+  EXPECT_TRUE(any_error("[[fault]]\ntarget = \"speed_m_s\"\n", "kind: missing"));
+  EXPECT_TRUE(any_error("[[fault]]\nkind = \"no_start\"\ntarget = \"speed_m_s\"\n", "acts on the engine: leave target out"));
+  EXPECT_TRUE(any_error(f + "until_s = 2\nduration_s = 1\n", "give until_s or duration_s, not both"));
+  EXPECT_TRUE(any_error(f + "duration_s = 0\n", "duration_s = 0: must be > 0 s"));
+  EXPECT_TRUE(any_error(f + "at_s = 1\nwhen = \"speed_m_s > 1\"\n", "give at_s or when, not both"));
+  EXPECT_TRUE(any_error(f + "when = \"speed_m_s > 1\"\nduration_s = 1\n", "ends at until_s, an absolute time"));
+  EXPECT_TRUE(any_error("[[fault]]\nkind = \"noise\"\ntarget = \"speed_m_s\"\nsigma = 1\nseed = -1\n", "seed = -1: must be >= 0"));
+  EXPECT_TRUE(any_error("[[fault]]\nkind = \"offset\"\ntarget = \"speed_m_s\"\noffset = inf\n", "offset = inf: must be a finite number"));
+  EXPECT_TRUE(any_error("[[fault]]\nkind = \"saturate\"\ntarget = \"driveTauRef_Nm\"\nlimit = -1\n", "limit = -1: must be a finite number >= 0"));
+  EXPECT_TRUE(any_error(f + "when = \"sped_m_s > 1\"\n", "when = \"sped_m_s\": not an output of this vehicle"));
+  EXPECT_TRUE(any_error("[[fault]]\nkind = \"stuck\"\ntarget = \"locked\"\n", "status bits are not a sensor value"));
+  EXPECT_TRUE(any_error("[[fault]]\nkind = \"delay\"\ntarget = \"driveTauRef_Nm\"\ndelay_s = 0.0005\n",
+                        "must be a whole multiple of the plant step"));
+  EXPECT_TRUE(any_error("[[fault]]\nkind = \"delay\"\ntarget = \"speed_m_s\"\ndelay_s = 20000\n", "more than 1e6 samples"));
+  EXPECT_TRUE(any_error("[[fault]]\nkind = \"intermittent\"\ntarget = \"speed_m_s\"\nperiod_s = 0.0015\n",
+                        "period_s = 0.0015: must be a whole multiple of the plant step"));
+  // a rig has no ECU messages
+  EXPECT_TRUE(any_error(f, "this vehicle has no ECU messages to fault", {}, "scenarios/battery_cc_discharge.toml"));
+  // --fault texts
+  EXPECT_TRUE(any_error("", "one fault per --fault, on one line", {"kind=stuck\ntarget=speed_m_s"}));
+  EXPECT_TRUE(any_error("", "expected key=value", {"stuck target=speed_m_s"}));
+  EXPECT_TRUE(any_error("", "not a fault key", {"Kind=stuck target=speed_m_s"}));
+  EXPECT_TRUE(any_error("", "kind is given twice", {"kind=stuck kind=fixed target=speed_m_s"}));
+  // a test file's scenario
+  EXPECT_TRUE(any_error("", "no_such_scenario': no such scenario file or name", {}, "no_such_scenario"));
+  const fs::path base = temp_dir() / "base.toml";
+  std::ofstream(base) << "scenario = \"ev_nedc\"\n";
+  const fs::path file = temp_dir() / "t2.toml";
+  std::ofstream(file) << "scenario = \"" << base.string() << "\"\n";
+  Scenario sc;
+  std::vector<std::string> errors;
+  EXPECT_FALSE(load_scenario(file.string(), {}, sc, errors));
+  ASSERT_FALSE(errors.empty());
+  EXPECT_NE(errors[0].find("names another scenario itself"), std::string::npos) << errors[0];
+}
+
+TEST(ExpectRules, EveryOtherExpectationRule) {
+  const std::string e = "[[expect]]\nsignal = \"time_s\"\n";
+  EXPECT_TRUE(any_error(e + "figure = \"soc_end\"\nmax = 1\n", "give either signal"));
+  EXPECT_TRUE(any_error(e + "value = 1\nother = \"time_s\"\ntol = 1\n", "give value or other, not both"));
+  EXPECT_TRUE(any_error(e + "max = 1\ntol = 1\n", "tol bounds"));
+  EXPECT_TRUE(any_error(e + "min = -inf\n", "min = -inf: must be finite"));
+  EXPECT_TRUE(any_error(e + "rate_max = -1\n", "rate_max = -1: must be a finite number >= 0 (per second)"));
+  EXPECT_TRUE(any_error("[[expect]]\nfigure = \"soc_end\"\nrate_max = 1\n", "a figure takes min, max or value with tol"));
+  EXPECT_TRUE(any_error(e + "max = 1\nwindow = \"at_end\"\nfrom_s = 1\n", "only windows always and eventually take from_s"));
+  EXPECT_TRUE(any_error(e + "max = 1\nfrom_s = -1\n", "from_s = -1: must be a finite time >= 0 s"));
+  EXPECT_TRUE(any_error(e + "max = 1\nwindow = \"within\"\nafter = \"time_s > 1\"\n", "needs within_s"));
+  EXPECT_TRUE(any_error(e + "max = 1\nafter = \"time_s > 1\"\n", "only window = \"within\" takes after and within_s"));
+  EXPECT_TRUE(any_error(e + "max = 1\nwindow = \"within\"\nafter = \"time_s ~ 1\"\nwithin_s = 1\n",
+                        "or name a fault's start or end"));
+  EXPECT_TRUE(any_error(e + "max = 1\nwindow = \"within\"\nafter = \"tme_s > 1\"\nwithin_s = 1\n",
+                        "after = \"tme_s\": not an output of this vehicle"));
+  EXPECT_TRUE(any_error(e + "max = 1\nother = \"tme_s\"\ntol = 1\n", "other = \"tme_s\": not an output"));
+  EXPECT_TRUE(any_error(e + "name = \"a\"\nmax = 9\n" + e + "name = \"a\"\nmax = 9\n", "another expectation has this name"));
+}
+
 }  // namespace
 }  // namespace ehpt::hil

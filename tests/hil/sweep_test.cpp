@@ -2,6 +2,8 @@
 // The sweep's engine (hil/campaign/sweep_*.hpp) without running anything: the plan and its
 // ids, the resume decision from the folder's statuses, merging, the folder's refusals.
 #include <gtest/gtest.h>
+
+#include "hil/diag/provenance.hpp"
 #include <stdlib.h>
 
 #include <filesystem>
@@ -174,6 +176,23 @@ TEST_F(SweepFiles, AFolderOfAnotherCampaignOrOfOtherFilesIsRefused) {
   EXPECT_FALSE(is_sweep_folder(dir_ + "/b"));
   EXPECT_EQ(read("b/notes.txt"), "mine");
   EXPECT_EQ(absolute_folder(dir_ + "/a/"), dir_ + "/a");
+}
+
+// Run ids are made of the inputs alone: a sweep resumed by another ehpt build would merge two
+// builds' results under the same ids, so the folder records its build and another is refused.
+TEST_F(SweepFiles, AResumeByAnotherBuildIsRefused) {
+  std::string error;
+  ASSERT_TRUE(open_sweep_folder(dir_ + "/c", "/x/one.toml", error)) << error;
+  const std::string json = read("c/sweep.json");
+  EXPECT_NE(json.find("\"build\": \"" + std::string(build_info().version) + " ("), std::string::npos) << json;
+  EXPECT_TRUE(open_sweep_folder(dir_ + "/c", "/x/one.toml", error)) << error;  // the same build resumes
+  write("c/sweep.json", "{\"format\": \"ehpt sweep folder 1\", \"campaign\": \"/x/one.toml\", \"build\": \"0.1 (old)\"}\n");
+  EXPECT_FALSE(open_sweep_folder(dir_ + "/c", "/x/one.toml", error));
+  EXPECT_NE(error.find("holds runs of another ehpt build (0.1 (old); this one is "), std::string::npos) << error;
+  write("c/sweep.json", "{\"format\": \"ehpt sweep folder 1\", \"campaign\": \"/x/one.toml\"}\n");
+  EXPECT_FALSE(open_sweep_folder(dir_ + "/c", "/x/one.toml", error));
+  EXPECT_NE(error.find("an older ehpt that did not record its build"), std::string::npos) << error;
+  EXPECT_EQ(read("c/sweep.json"), "{\"format\": \"ehpt sweep folder 1\", \"campaign\": \"/x/one.toml\"}\n");  // untouched
 }
 
 }  // namespace
