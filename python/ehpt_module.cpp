@@ -67,6 +67,7 @@ using namespace ehpt;
 EHPT_PY_ARG(ScenarioArg, "str | os.PathLike[str]")
 EHPT_PY_ARG(SetArg, "dict[str, object] | None")
 EHPT_PY_ARG(CycleArg, "tuple[ArrayLike, ArrayLike] | None")
+EHPT_PY_ARG(FaultsArg, "Sequence[str] | None")
 EHPT_PY_ARG(BoolArg, "bool")
 EHPT_PY_ARG(IntArg, "int")
 EHPT_PY_ARG(CommandArg, "PsdCommand | EvCommand")
@@ -564,7 +565,7 @@ struct RunResult {
   py::str text;           // the lines `ehpt run` prints
 };
 
-RunResult run(const ScenarioArg& scenario_arg, const SetArg& set, const CycleArg& cycle_arg, const py::object& faults_arg) {
+RunResult run(const ScenarioArg& scenario_arg, const SetArg& set, const CycleArg& cycle_arg, const FaultsArg& faults_arg) {
   const std::string scenario = scenario_of(scenario_arg, "run()");
   const std::vector<std::string> overrides = overrides_of(set);
   const std::vector<std::string> faults = faults_of(faults_arg, "run()");
@@ -802,7 +803,7 @@ enum class Family { kNone, kPsd, kEv };
 class PySimulation {
  public:
   PySimulation(const ScenarioArg& scenario_arg, const SetArg& set, const BoolArg& external_ecu,
-               const IntArg& chunk_steps_arg, const CycleArg& cycle_arg, const py::object& faults_arg)
+               const IntArg& chunk_steps_arg, const CycleArg& cycle_arg, const FaultsArg& faults_arg)
       : external_(bool_of(external_ecu, "Simulation(): external_ecu")) {
     const std::string scenario = scenario_of(scenario_arg, "Simulation()");
     // the row buffer holds chunk_steps rows of every column: bounded, so that a typo cannot ask
@@ -1018,20 +1019,21 @@ Arguments:
             {"vehicle.ecu.soc_ref": 0.62, "solver.duration_s": 100}). Values: bool, int,
             float (sent as its repr, the shortest text that reads back the same), str (stays
             a string) or a list of them.
+  cycle     None (the scenario's cycle file), or a pair (t_s, v_m_s) of 1-D arrays of the
+            same length: time in s (non-decreasing, >= 2 points) and speed in m/s (finite,
+            >= 0, < 200), in place of the scenario's cycle file and checked by the same rules;
+            solver.duration_s defaults to the last time, cycle_periodic applies.
   faults    None, or a list of faults, each as `ehpt run --fault` takes it:
             ["kind=stuck target=batSOC at_s=300"] (docs/testing.md); they add to the file's
             [[fault]] tables. A test file's [[expect]] verdict is summary["test"]
             (verdict, expectations with message, time and value), exit_code 5 if one failed;
             timeseries gets a faults_active column.
-  cycle     None (the scenario's cycle file), or a pair (t_s, v_m_s) of 1-D arrays of the
-            same length: time in s (non-decreasing, >= 2 points) and speed in m/s (finite,
-            >= 0, < 200), in place of the scenario's cycle file and checked by the same rules;
-            solver.duration_s defaults to the last time, cycle_periodic applies.
 
 Returns:
   RunResult: summary (summary.json as a dict), columns, timeseries ({name: float64 array}),
-  exit_code (0 ok, 3 a run-time fault such as SOC out of its window: the outputs are kept,
-  nothing is raised), warnings, text; to_dataframe() gives a pandas DataFrame.
+  exit_code (0 ok; 3 a run-time fault such as SOC out of its window; 5 an expectation of a
+  test failed: the outputs are kept, nothing is raised), warnings, text; to_dataframe() gives
+  a pandas DataFrame.
 
 Raises:
   ehpt.Error (a ValueError) when the scenario does not load: every problem, each with its
@@ -1129,7 +1131,7 @@ PYBIND11_MODULE(ehpt, m) {
         py::arg("faults") = py::none(), kRunDoc);
 
   py::class_<PySimulation>(m, "Simulation", kSimulationDoc)
-      .def(py::init<const ScenarioArg&, const SetArg&, const BoolArg&, const IntArg&, const CycleArg&, const py::object&>(),
+      .def(py::init<const ScenarioArg&, const SetArg&, const BoolArg&, const IntArg&, const CycleArg&, const FaultsArg&>(),
            py::arg("scenario"), py::arg("set") = py::none(), py::arg("external_ecu") = false,
            py::arg("chunk_steps") = 50000, py::arg("cycle") = py::none(), py::arg("faults") = py::none(),
            kSimulationInitDoc)

@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <iostream>
 
+#include "ecu/ev_follower.hpp"
+#include "ecu/psd_ecu.hpp"
 #include "hil/config/scenario.hpp"
+#include "msgs/fields.hpp"
 #include "hil/run/simulation.hpp"
 #include "targets/cli.hpp"
 
@@ -19,9 +22,12 @@ const char* kListHelp =
     "Debian package), the source tree's scenarios/ for an ehpt run from its build folder.\n";
 
 const char* kSignalsHelp =
-    "usage: ehpt signals SCENARIO\n"
+    "usage: ehpt signals SCENARIO [--fault-targets]\n"
     "Lists the columns timeseries.csv can hold for the scenario's vehicle (choose them with\n"
-    "[output] signals = [...] in the scenario). Units are the name's suffix.\n";
+    "[output] signals = [...] in the scenario). Units are the name's suffix. These are what an\n"
+    "[[expect]] bounds (docs/testing.md).\n"
+    "  --fault-targets  the fields of the vehicle's sensor and command messages instead (the\n"
+    "                   DBC's signal names): what a [[fault]]'s target names\n";
 
 // The help ends with where this ehpt looks (build folder or installed).
 std::string list_help() {
@@ -69,7 +75,11 @@ int cmd_list(const std::vector<std::string>& args) {
   return out(text) ? 0 : 1;
 }
 
-int cmd_signals(const std::vector<std::string>& args) {
+int cmd_signals(const std::vector<std::string>& args_in) {
+  std::vector<std::string> args = args_in;
+  const auto flag = std::find(args.begin(), args.end(), "--fault-targets");
+  const bool targets = flag != args.end();
+  if (targets) args.erase(flag);
   if (wants_help(args) || args.size() != 1) {
     if (args.size() != 1) {
       std::cerr << kSignalsHelp;
@@ -79,7 +89,30 @@ int cmd_signals(const std::vector<std::string>& args) {
   }
   ehpt::hil::Scenario sc;
   if (const int rc = load(args[0], {}, sc); rc != 0) return rc;
-  return out(signal_lines(ehpt::hil::scenario_signals(sc))) ? 0 : 1;
+  if (!targets) return out(signal_lines(ehpt::hil::scenario_signals(sc))) ? 0 : 1;
+  std::string text;
+  const auto fields = [&](const char* title, const auto& table) {
+    text += std::string(title) + "\n";
+    for (const auto& f : table) {
+      if (f.name == "fault" || f.name == "locked") continue;  // status bits: not a value to fault
+      const char* kind = f.kind == ehpt::msgs::FieldKind::kFraction ? "fraction"
+                         : f.kind == ehpt::msgs::FieldKind::kFlag   ? "flag (0 or 1)"
+                                                                    : "";
+      text += "  " + std::string(f.name) + std::string(f.name.size() < 22 ? 22 - f.name.size() : 1, ' ') +
+              (f.unit.empty() ? std::string(kind) : std::string(f.unit)) + "\n";
+    }
+  };
+  if (sc.ecu.holds<ehpt::ecu::PsdEcuParams>()) {
+    fields("sensor message (the plant to its ECU; a sensor fault's target)", ehpt::msgs::kPsdSensorFieldTable);
+    fields("command message (the ECU to the plant; a command fault's target)", ehpt::msgs::kPsdCommandFieldTable);
+  } else if (sc.ecu.holds<ehpt::ecu::EvFollowerParams>()) {
+    fields("sensor message (the plant to its ECU; a sensor fault's target)", ehpt::msgs::kEvSensorFieldTable);
+    fields("command message (the ECU to the plant; a command fault's target)", ehpt::msgs::kEvCommandFieldTable);
+  } else {
+    std::cerr << args[0] << ": this vehicle has no ECU messages (a rig): nothing to fault\n";
+    return 2;
+  }
+  return out(text) ? 0 : 1;
 }
 
 }  // namespace ehpt::cli

@@ -203,7 +203,7 @@ class Docstrings(unittest.TestCase):
     def test_help_run_explains_every_argument_and_the_result(self):
         help_text = pydoc.render_doc(ehpt.run, renderer=pydoc.plaintext)
         names = [p[0] for p in params(pybind_signature(ehpt.run))]
-        self.assertEqual(names, ["scenario", "set", "cycle"])
+        self.assertEqual(names, ["scenario", "set", "cycle", "faults"])
         self.assertEqual(self.arguments_section(ehpt.run.__doc__), names)
         for n in names:
             self.assertIn("  " + n + "  ", help_text)

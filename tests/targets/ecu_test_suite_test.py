@@ -70,6 +70,14 @@ with tempfile.TemporaryDirectory() as tmp:
             v = json.load(f)["test"]["verdict"]
         check(v == "passed", f"{name}: summary.json verdict {v} agrees with JUnit")
 
+    # the names a fault's target takes
+    rc, out, err = run(["signals", "psecu2_nedc", "--fault-targets"])
+    names = [l.split()[0] for l in out.splitlines() if l.startswith("  ")]
+    check(rc == 0 and "batSOC" in names and "motTauRef_Nm" in names and "iceON" in names and
+          "fault" not in names and "locked" not in names, f"ehpt signals --fault-targets: the message fields ({names})")
+    rc, out, err = run(["signals", "battery_cc_discharge", "--fault-targets"])
+    check(rc == 2 and "no ECU messages" in err, f"... and a rig has none (exit {rc})")
+
     # a failing and a passing test
     base = os.path.join(SRC, "scenarios", "psecu2_nedc.toml")
     good = os.path.join(tmp, "good.toml")
