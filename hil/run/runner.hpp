@@ -239,7 +239,7 @@ class Runner {
       tick_controller(n_);
       // the sensors of a sample are read with the command in force until then (the built-in
       // ECU's were, in tick_controller); an outside ECU's command acts once it has come
-      if (!external_ecu_ || n_ % controller_ratio_ != 0) actuate(n_);
+      if (faults_ != nullptr && (!external_ecu_ || n_ % controller_ratio_ != 0)) actuate(n_);
       if (external_ecu_ && n_ % controller_ratio_ == 0) {
         // an ECU sample: the outputs at t_n follow with its command (as the built-in ECU's
         // do): from the port's exchange, or back to the caller, who reads the sensors at t_n
