@@ -83,12 +83,9 @@ def rows_of(bench):
         add(f"`{vehicle}`: implicit Euler / RK4, ns per step", f"speed.vehicles.{vehicle}.implicit_euler_over_rk4", 2,
             f"<= {ratio_target:g}" if isinstance(ratio_target, (int, float)) else "")
 
-    target = speed.get("target_test_overhead_fraction")
-    overhead = speed.get("test_overhead_fraction")
-    if isinstance(overhead, (int, float)) and math.isfinite(overhead):
-        rows.append(("an ECU test (a fault, four expectations at every step) over a plain `psecu2_nedc` rk4 step, %",
-                     number(100.0 * overhead, 1), "", f"<= {number(100.0 * target, 0)}" if isinstance(target, (int, float)) else "",
-                     "speed.test_overhead_fraction"))
+    target = speed.get("target_test_overhead_percent")
+    add("an ECU test (a fault, four expectations at every step) over a plain `psecu2_nedc` rk4 step, %",
+        "speed.test_overhead_percent", 1, f"<= {number(target, 0)}" if isinstance(target, (int, float)) else "")
 
     lat = bench.get("latency", {})
     if lat.get("status") == "ok" or at(bench, "latency.ehpt_us.status") == "ok":

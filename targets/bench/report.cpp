@@ -384,8 +384,9 @@ std::string report_json(const Bench& b) {
     by_vehicle.object(v, o);
   }
   speed.object("vehicles", by_vehicle);
-  speed.number("test_overhead_fraction", test_overhead(b));  // (test - plain) / plain, psecu2 rk4
-  speed.number("target_test_overhead_fraction", 0.10);
+  // (test - plain) / plain of a psecu2 rk4 step, in %
+  speed.number("test_overhead_percent", 100.0 * test_overhead(b));
+  speed.number("target_test_overhead_percent", 10.0);
   j.object("speed", speed);
 
   JsonObject lat;
