@@ -542,7 +542,10 @@ void check_test_times(Scenario& out, Context& ctx) {
                              (sensor ? "samples" : "steps") + " of history");
       }
     }
-    if (f.effect == FaultEffect::kIntermittent && !whole(f.period_s, h)) {
+    if (f.effect == FaultEffect::kIntermittent && f.period_s / h > static_cast<double>(kMaxSteps)) {
+      ctx.errors.push_back(f.where + ": " + field + ".period_s = " + io::number_text(f.period_s) +
+                           ": more than 1e10 steps (no run is that long)");
+    } else if (f.effect == FaultEffect::kIntermittent && !whole(f.period_s, h)) {
       ctx.errors.push_back(f.where + ": " + field + ".period_s = " + io::number_text(f.period_s) +
                            ": must be a whole multiple of the plant step (" + io::number_text(h) + " s)");
     }

@@ -43,8 +43,9 @@ struct ExpectOutcome {
 
 // The last grid point of a window ending at t_s (inclusive; infinity: none).
 inline std::int64_t last_step_at(double t_s, double h_s) {
-  if (!std::isfinite(t_s)) return std::numeric_limits<std::int64_t>::max();
-  return static_cast<std::int64_t>(std::floor(t_s / h_s + 1e-9));
+  const double steps = std::floor(t_s / h_s + 1e-9);
+  if (!(steps < 9e18)) return std::numeric_limits<std::int64_t>::max();  // (as first_step_at)
+  return static_cast<std::int64_t>(steps);
 }
 
 // How far x lies outside the bound (0: inside). reference: value or the other signal's.
@@ -103,7 +104,8 @@ class ExpectationChecker {
       it.other = e.other.empty() ? nullptr : member(e.other);
       it.from = e.window == ExpectWindow::kAtEnd ? total_ : first_step_at(e.from_s, h_s_);
       it.to = e.window == ExpectWindow::kAtEnd ? total_ : std::min(total_, last_step_at(e.to_s, h_s_));
-      it.width = e.window == ExpectWindow::kWithin ? last_step_at(e.within_s, h_s_) : 0;
+      // at most the run: event + width never overflows
+      it.width = e.window == ExpectWindow::kWithin ? std::min(total_, last_step_at(e.within_s, h_s_)) : 0;
       if (e.window == ExpectWindow::kWithin) {
         it.from = it.to = std::numeric_limits<std::int64_t>::max();  // until the event
         if (e.after_fault < 0) it.condition = compile_condition<Outputs>(e.after_condition, signals);

@@ -30,8 +30,10 @@ namespace ehpt::hil {
 // The first grid point at or after time t_s (within 1e-9 of a step: a time written as a whole
 // number of steps is that step).
 inline std::int64_t first_step_at(double t_s, double h_s) {
-  if (!std::isfinite(t_s)) return std::numeric_limits<std::int64_t>::max();
-  return static_cast<std::int64_t>(std::ceil(t_s / h_s - 1e-9));
+  const double steps = std::ceil(t_s / h_s - 1e-9);
+  // infinity, or a time so far out that it has no step (1e300 s): never, not an overflow
+  if (!(steps < 9e18)) return std::numeric_limits<std::int64_t>::max();
+  return static_cast<std::int64_t>(steps);
 }
 
 // A condition on one output (a member of Outputs), compiled.

@@ -358,6 +358,14 @@ TEST(Expect, WithinCountsFromTheFaultsStartOrEnd) {
   EXPECT_NE(never.expectations[0].message.find("did not happen"), std::string::npos) << never.expectations[0].message;
 }
 
+// Times far past any step (1e300 s) are "never", not an overflow of the step count.
+TEST(Expect, FarTimesAreNeverNotAnOverflow) {
+  EXPECT_TRUE(passes("signal = \"time_s\"\nmax = 3\nto_s = 1e300"));
+  const std::string fault = "[[fault]]\nname = \"f\"\nkind = \"offset\"\ntarget = \"speed_m_s\"\noffset = 1\nat_s = 1\nuntil_s = 1e300\n";
+  EXPECT_TRUE(verdict(fault + "[[expect]]\nsignal = \"time_s\"\nmin = 2\nwindow = \"within\"\nafter = \"f.start\"\n"
+                              "within_s = 1e300\n").passed);
+}
+
 TEST(Expect, FiguresAtTheEndAndExpectFailTurnsTheVerdict) {
   // the EV stands for NEDC's first 11 s: its SOC only falls (the inverter's magnetising draw)
   EXPECT_TRUE(passes("figure = \"soc_delta\"\nmax = 0"));
@@ -455,6 +463,7 @@ TEST(FaultRules, EveryOtherFaultRule) {
   EXPECT_TRUE(any_error("[[fault]]\nkind = \"delay\"\ntarget = \"speed_m_s\"\ndelay_s = 20000\n", "more than 1e6 samples"));
   EXPECT_TRUE(any_error("[[fault]]\nkind = \"intermittent\"\ntarget = \"speed_m_s\"\nperiod_s = 0.0015\n",
                         "period_s = 0.0015: must be a whole multiple of the plant step"));
+  EXPECT_TRUE(any_error("[[fault]]\nkind = \"intermittent\"\ntarget = \"speed_m_s\"\nperiod_s = 1e300\n", "more than 1e10 steps"));
   // a rig has no ECU messages
   EXPECT_TRUE(any_error(f, "this vehicle has no ECU messages to fault", {}, "scenarios/battery_cc_discharge.toml"));
   // --fault texts
