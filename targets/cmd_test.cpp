@@ -51,7 +51,8 @@ const char* kTestHelp =
     "                   TEST --bus SPEC --lockstep' and ehpt starts ARGV (the rest of the\n"
     "                   line; no shell) as its ECU, {test}, {bus} and {prefix} replaced by the\n"
     "                   test file, its bus and its LCM prefix. SPEC: socketcand:HOST:PORT\n"
-    "                   (test slot k of -j N on PORT + k) or lcm:URL (prefix EHPT_S<k>_). E.g.\n"
+    "                   (test slot k of -j N on PORT + k) or lcm:URL (udpm: slot k on the URL's\n"
+    "                   port + k, default 7667; prefix EHPT_S<k>_). E.g.\n"
     "                   --bus socketcand:127.0.0.1:29600 --ecu-cmd ehpt ecu {test} --bus {bus}\n"
     "                   An ECU that exits non-zero or crashes is a test error (its status and\n"
     "                   the tail of its log in the report)\n"
@@ -229,7 +230,7 @@ struct BusOptions {
     spec = text;
     if (text.rfind("lcm:", 0) == 0 && text.size() > 4) {
       lcm = true;
-      return true;
+      return parse_udpm_port(text.substr(4));
     }
     if (text.rfind("socketcand:", 0) != 0) return false;
     const auto colon = text.rfind(':');
@@ -240,8 +241,33 @@ struct BusOptions {
     port = static_cast<int>(p);
     return true;
   }
+  // udpm://ADDRESS[:PORT][?options]: slot k listens on PORT + k (LCM's default 7667 when the
+  // URL names none). One shared port would hand every -j N session each other's datagrams:
+  // each process then filters by channel prefix but its receive buffer carries the load of
+  // all of them, and under CI load that lost a datagram (an ECU timeout).
+  std::string udpm_head, udpm_tail;  // the URL around the port; empty when not udpm
+  bool parse_udpm_port(const std::string& url) {
+    const std::string scheme = "udpm://";
+    if (url.rfind(scheme, 0) != 0) return true;  // memq:// and the rest: one spec for all
+    const std::size_t query = std::min(url.find('?'), url.size());
+    const std::size_t colon = url.find(':', scheme.size());
+    const bool has_port = colon != std::string::npos && colon < query;
+    port = 7667;
+    if (has_port) {
+      char* end = nullptr;
+      const std::string digits = url.substr(colon + 1, query - colon - 1);
+      const long p = std::strtol(digits.c_str(), &end, 10);
+      if (digits.empty() || *end != '\0' || p < 1 || p > 65535 - 256) return false;
+      port = static_cast<int>(p);
+    }
+    udpm_head = "lcm:" + url.substr(0, has_port ? colon : query);
+    udpm_tail = url.substr(query);
+    return true;
+  }
   std::string spec_for(std::size_t slot) const {
-    return lcm ? spec : "socketcand:" + host + ":" + std::to_string(port + static_cast<int>(slot));
+    const int slot_port = port + static_cast<int>(slot);
+    if (lcm) return udpm_head.empty() ? spec : udpm_head + ":" + std::to_string(slot_port) + udpm_tail;
+    return "socketcand:" + host + ":" + std::to_string(slot_port);
   }
   std::string prefix_for(std::size_t slot) const { return lcm ? "EHPT_S" + std::to_string(slot) + "_" : "EHPT_"; }
 };
@@ -278,7 +304,7 @@ int cmd_test(const std::vector<std::string>& args) {
     if ((a == "--out" || a == "--junit" || a == "--set" || a == "-j" || a == "--bus" || a == "--ecu-cmd") &&
         i + 1 >= args.size()) {
       std::cerr << a << " needs a value\n" << kTestHelp;
-      return 1;
+      return 2;
     }
     if (a == "--out") {
       out_dir = args[++i];
@@ -292,33 +318,33 @@ int cmd_test(const std::vector<std::string>& args) {
       const long n = std::strtol(v.c_str(), &end, 10);
       if (v.empty() || *end != '\0' || n < 1 || n > 256) {
         std::cerr << "-j " << v << ": must be a whole number of tests at a time in [1, 256]\n";
-        return 1;
+        return 2;
       }
       jobs = static_cast<int>(n);
     } else if (a == "--quiet") {
       quiet = true;
     } else if (a == "--bus") {
       if (!bus.parse(args[++i])) {
-        std::cerr << "--bus " << args[i] << ": must be socketcand:HOST:PORT or lcm:URL (lcm:udpm://239.255.76.67:7667?ttl=0)\n";
-        return 1;
+        std::cerr << "--bus " << args[i] << ": must be socketcand:HOST:PORT or lcm:URL (lcm:udpm://239.255.76.67:7667?ttl=0), a port in [1, 65279]\n";
+        return 2;
       }
     } else if (a == "--ecu-cmd") {
       bus.ecu_cmd.assign(args.begin() + static_cast<std::ptrdiff_t>(i) + 1, args.end());
       break;
     } else if (!a.empty() && a[0] == '-') {
       std::cerr << "unknown option " << a << "\n" << kTestHelp;
-      return 1;
+      return 2;
     } else {
       paths.push_back(a);
     }
   }
   if (paths.empty() || out_dir.empty()) {
     std::cerr << kTestHelp;
-    return 1;
+    return 2;
   }
   if (bus.spec.empty() != bus.ecu_cmd.empty()) {
     std::cerr << "--bus and --ecu-cmd go together: the plant runs on the bus, ehpt starts the ECU there\n";
-    return 1;
+    return 2;
   }
   bus.enabled = !bus.spec.empty();
   bus.ecu_is_ehpt = bus.enabled && bus.ecu_cmd[0] == "ehpt";
@@ -346,7 +372,7 @@ int cmd_test(const std::vector<std::string>& args) {
   std::string error;
   if (!make_dir(out_dir + "/logs", error)) {
     std::cerr << "error: " << error << "\n";
-    return 1;
+    return 2;
   }
   const std::string self = io::self_executable();
   // each test a slot (its own bus port or LCM prefix while it runs)

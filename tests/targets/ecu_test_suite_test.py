@@ -124,6 +124,13 @@ with tempfile.TemporaryDirectory() as tmp:
     rc, out, err = run(["test", good, typo, "--out", os.path.join(tmp, "typo")])
     check(rc == 2 and "typo.toml:5" in err and 'did you mean "stuck"' in err, f"a typo: exit 2, file:line, a hint ({rc}: {err})")
     check(not os.path.exists(os.path.join(tmp, "typo", "good")), "... and nothing ran")
+    # a command line that cannot run is bad input (2), never "a test failed" (1)
+    for bad, what in [(["--bus", "lcm:udpm://239.255.76.67:99999?ttl=0", "--ecu-cmd", "true"], "a udpm port past 65279"),
+                      (["--bus", "socketcand:127.0.0.1:0", "--ecu-cmd", "true"], "port 0"),
+                      (["-j", "0"], "-j 0"), (["--frobnicate"], "an unknown option"),
+                      (["--bus", "socketcand:127.0.0.1:29600"], "--bus without --ecu-cmd")]:
+        rc, out, err = run(["test", good, "--out", os.path.join(tmp, "bad")] + bad)
+        check(rc == 2 and not os.path.exists(os.path.join(tmp, "bad", "good")), f"{what}: exit 2, nothing ran ({rc}: {err[:120]})")
 
 print("ok" if not failures else f"{len(failures)} check(s) failed")
 sys.exit(1 if failures else 0)

@@ -9,8 +9,9 @@ examples/tests/suite.toml is run by `ehpt test` four ways:
 - `ehpt ecu` as its own process over socketcand, started by `ehpt test --bus ... --ecu-cmd`
   (the plant in lockstep): every test's verdict and trajectory_hash equal the codec run's
   (CAN quantises the signals exactly as the codec does);
-- `ehpt ecu` over LCM udpm (in this private network namespace, ttl=0): verdicts and hashes
-  equal the plain run's (LCM carries the doubles). udpm may lose a datagram under load; a
+- `ehpt ecu` over LCM udpm (in this private network namespace, ttl=0), two at a time, each
+  slot on its own port (7667 + k): verdicts and hashes equal the plain run's (LCM carries
+  the doubles). udpm may lose a datagram under load; a
   test that then ended degraded (an <error>) is run once more, and says so.
 Exit 0 if every check passed, 1 otherwise; 77 (skipped) outside a network namespace.
 """
@@ -44,7 +45,7 @@ def suite(out, extra, jobs="2"):
         if os.path.exists(path):
             with open(path) as f:
                 s = json.load(f)
-            runs[name] = (s["test"]["verdict"], s["trajectory_hash"], s.get("status"))
+            runs[name] = (s["test"]["verdict"], s["trajectory_hash"], s.get("status"), s.get("bus", {}).get("transport", ""))
     return p.returncode, p.stdout + p.stderr, runs
 
 
@@ -61,14 +62,15 @@ with tempfile.TemporaryDirectory() as tmp:
               f"{name}: socketcand verdict and trajectory_hash {can.get(name)} == codec run's {codec[name]}")
     lcm_args = ["--bus", "lcm:udpm://239.255.76.67:7667?ttl=0", "--ecu-cmd", "ehpt", "ecu", "{test}", "--bus", "{bus}",
                 "--lcm-prefix", "{prefix}"]
-    # one test at a time: every udpm run shares the group and port (each process receives the
-    # other pair's datagrams too), which doubled the load on the receive buffers and lost a
-    # datagram in CI (an ECU timeout, exit 4)
-    rc, text, lcm = suite(os.path.join(tmp, "lcm"), lcm_args, jobs="1")
+    # -j 2: each slot on its own udpm port (7667 + k), so neither pair receives the other's
+    # datagrams (one shared port doubled each receive buffer's load and lost a datagram in CI)
+    rc, text, lcm = suite(os.path.join(tmp, "lcm"), lcm_args)
     if rc != 0:
         print("note: the LCM suite did not pass at once (udpm may drop a datagram under load); run once more:\n" + text[-800:])
-        rc, text, lcm = suite(os.path.join(tmp, "lcm2"), lcm_args, jobs="1")
+        rc, text, lcm = suite(os.path.join(tmp, "lcm2"), lcm_args)
     check(rc == 0, f"ehpt ecu over LCM: the suite passes ({rc})\n{text[-1500:]}")
+    ports = {name: run[3].split("udpm://239.255.76.67:")[-1].split("?")[0] for name, run in lcm.items()}
+    check(set(ports.values()) == {"7667", "7668"}, f"the two LCM slots on ports 7667 and 7668: {ports}")
     for name in sorted(plain):
         check(lcm.get(name, (None, None))[:2] == plain[name][:2],
               f"{name}: LCM verdict and trajectory_hash {lcm.get(name)} == plain run's {plain[name]}")
