@@ -42,6 +42,7 @@ BatteryRcConstants derive(const BatteryRcParams& p) {
   c.soc_min = p.soc_min;
   c.soc_max = p.soc_max;
   c.emf_initial_V = c.emf_min_V + p.soc_initial * (c.emf_max_V - c.emf_min_V);
+  c.strings_parallel = p.strings_parallel;
   return c;
 }
 
@@ -86,8 +87,8 @@ BatteryTerminal BatteryRc::at_current(double emf_V, double v_rc_V, double curren
   b.current_A = current_A;
   b.voltage_V = v_int - c_.r0_Ohm * current_A;
   b.parasitic_A = c_.k_parasitic * std::abs(current_A);
-  b.main_A = current_A + b.parasitic_A;
-  b.loss_W = c_.r0_Ohm * current_A * current_A + v_rc_V * v_rc_V * inv_r1_Ohm_ + v_int * b.parasitic_A;
+  b.main_A = current_A + b.parasitic_A + short_A_;
+  b.loss_W = c_.r0_Ohm * current_A * current_A + v_rc_V * v_rc_V * inv_r1_Ohm_ + v_int * (b.parasitic_A + short_A_);
   return b;
 }
 

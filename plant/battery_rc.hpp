@@ -10,6 +10,8 @@
 //   C1     dv_rc/dt = i_m - v_rc / R1
 //   v_term = E - v_rc - R0 i,   SOC = (E - E_min) / (E_max - E_min)
 //   P_loss = R0 i^2 + v_rc^2 / R1 + (E - v_rc) i_p
+// A plant fault (plant/health.hpp, set_health) scales R0, C_batt, the strings, or adds an
+// internal short i_s to i_m (loss (E - v_rc) i_s, like the parasitic source's), between steps.
 // The load is an ideal constant-power load P (the drives' DC power, §1.6, §6.5):
 //   v_term = (v_int + sqrt(v_int^2 - 4 R0 P)) / 2,  v_int = E - v_rc,  i = P / v_term
 //   (no real root: the load asks for more than the pack can give -> fault flag).
@@ -24,6 +26,7 @@
 #include <optional>
 #include <string>
 
+#include "plant/health.hpp"
 #include "plant/problems.hpp"
 #include "plant/signals.hpp"
 
@@ -56,6 +59,7 @@ struct BatteryRcConstants {
   double efficiency_max = 0.0;  // eta at k = 0
   double soc_min = 0.0, soc_max = 1.0;
   double emf_initial_V = 0.0;
+  int strings_parallel = 1;     // np (a lost string scales the pack by (np - k) / np)
 };
 
 BatteryRcConstants derive(const BatteryRcParams& p);
@@ -81,8 +85,31 @@ class BatteryRc {
         inv_c_batt_F_(1.0 / c_.c_batt_F),
         inv_c1_F_(1.0 / c_.c1_F),
         inv_r1_Ohm_(1.0 / c_.r1_Ohm),
-        four_r0_Ohm_(4.0 * c_.r0_Ohm) {}
+        four_r0_Ohm_(4.0 * c_.r0_Ohm),
+        healthy_(c_) {}
+  // the pack as it is now (after plant faults) and as it was built
   const BatteryRcConstants& constants() const { return c_; }
+  const BatteryRcConstants& healthy_constants() const { return healthy_; }
+
+  // Between steps (a plant fault starts or ends): the pack's constants from its healthy ones.
+  // The states (E, v_rc) stay: the EMF and SOC do not jump; what the two capacitors held
+  // beyond their new size is gone (the plant's energy audit books it). h valid: strings_lost
+  // < strings_parallel, gains > 0, short_A >= 0 (hil/config/test_reader.cpp).
+  void set_health(const BatteryHealth& h) {
+    const double keep = static_cast<double>(healthy_.strings_parallel - h.strings_lost) /
+                        static_cast<double>(healthy_.strings_parallel);
+    c_ = healthy_;
+    c_.c_batt_F = healthy_.c_batt_F * keep * h.capacity_gain;
+    c_.c1_F = healthy_.c1_F * keep;
+    c_.r0_Ohm = healthy_.r0_Ohm / keep * h.r0_gain;
+    c_.r1_Ohm = healthy_.r1_Ohm / keep;
+    c_.current_max_A = healthy_.current_max_A * keep;
+    inv_c_batt_F_ = 1.0 / c_.c_batt_F;
+    inv_c1_F_ = 1.0 / c_.c1_F;
+    inv_r1_Ohm_ = 1.0 / c_.r1_Ohm;
+    four_r0_Ohm_ = 4.0 * c_.r0_Ohm;
+    short_A_ = h.short_A;
+  }
 
   // Run phase: pure functions.
   BatteryTerminal terminal(double emf_V, double v_rc_V, double load_power_W) const;
@@ -96,6 +123,9 @@ class BatteryRc {
   // Energy held by the two capacitors; its decrease is what the battery gave out, losses included.
   double stored_energy_J(double emf_V, double v_rc_V) const {
     return 0.5 * c_.c_batt_F * emf_V * emf_V + 0.5 * c_.c1_F * v_rc_V * v_rc_V;
+  }
+  double healthy_stored_energy_J(double emf_V, double v_rc_V) const {
+    return 0.5 * healthy_.c_batt_F * emf_V * emf_V + 0.5 * healthy_.c1_F * v_rc_V * v_rc_V;
   }
   // §6.4 run-time asserts: SOC window and cell current.
   bool soc_in_window(double emf_V) const {
@@ -113,6 +143,8 @@ class BatteryRc {
   BatteryRcConstants c_;
   double inv_c_batt_F_ = 0.0, inv_c1_F_ = 0.0, inv_r1_Ohm_ = 0.0;
   double four_r0_Ohm_ = 0.0;  // 4 R0, the product terminal() used to form at every call
+  double short_A_ = 0.0;      // an internal short's current (0: healthy; + 0.0 changes no bit)
+  BatteryRcConstants healthy_;
 };
 
 // Run phase, inline: the plant's derivative function calls it at every stage.
@@ -127,8 +159,8 @@ class BatteryRc {
   return {.voltage_V = voltage_V,
           .current_A = current_A,
           .parasitic_A = parasitic_A,
-          .main_A = current_A + parasitic_A,
-          .loss_W = c_.r0_Ohm * current_A * current_A + v_rc_V * v_rc_V * inv_r1_Ohm_ + v_int * parasitic_A,
+          .main_A = current_A + parasitic_A + short_A_,
+          .loss_W = c_.r0_Ohm * current_A * current_A + v_rc_V * v_rc_V * inv_r1_Ohm_ + v_int * (parasitic_A + short_A_),
           .feasible = feasible};
 }
 

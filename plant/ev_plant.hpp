@@ -28,6 +28,9 @@
 //   body:     (m + J (G/r)^2) dv/dt = tau G/r - F_roll - F_v(v) - m g sin(alpha) - F_brake
 //             ds/dt = v,  dh/dt = v sin(alpha)
 //   stuck:    dv/dt = 0 while |tau G/r - m g sin(alpha)| <= F_roll + F_brake   (locked, §7.2)
+//   faults:   set_health (plant/health.hpp) between steps: the pack's constants, and derating:
+//             the drive's torque bound x gain (tau_cmd clamped to it before the drive, the
+//             bound the ECU reads in driveTauLim; the friction brake takes the braking it cuts)
 //
 // State and energy audit: EvStateLayout and ev_energy_audit (ev_state.hpp).
 // Crossing 0 (one function per mode, always falling through zero), then the drive's own
@@ -203,7 +206,7 @@ class EvPlant : public EvStateLayout {
     s.driverRequest_Nm = drive(p_.driver, t_s, x[kSpeed]).request;
     s.speed_m_s = x[kSpeed];
     s.driveW_rad_s = e.drive_speed_rad_s;
-    s.driveTauLim_Nm = drive_.torque_limit_Nm(e.drive, e.drive_speed_rad_s);
+    s.driveTauLim_Nm = torque_gain_ * drive_.torque_limit_Nm(e.drive, e.drive_speed_rad_s);
     s.drivePowDel_W = e.power_mech_W;
     s.batSOC = battery_.soc(x[kEmf]);
     s.batPowDel_W = e.battery.voltage_V * e.battery.current_A;
@@ -227,7 +230,16 @@ class EvPlant : public EvStateLayout {
 
   // Energy audit between x0 and x (end of run; allocates).
   EnergyAudit audit(const State& x0, const State& x) const {
-    return ev_energy_audit(battery_, mass_eff_kg_, p_.body.mass_kg, x0.data(), x.data());
+    return ev_energy_audit(battery_, mass_eff_kg_, p_.body.mass_kg, x0.data(), x.data(), fault_removed_J_);
+  }
+
+  // Plant faults, between steps only (the run's fault injector; this plant is that run's own).
+  static constexpr std::array<const char*, 1> kMachines = {"drive"};
+  void set_health(const PlantHealth& h, const State& x) {
+    const double before_J = battery_.stored_energy_J(x[kEmf], x[kVrc]);
+    battery_.set_health(h.battery);
+    fault_removed_J_ += before_J - battery_.stored_energy_J(x[kEmf], x[kVrc]);
+    torque_gain_ = h.torque_gain[0];
   }
 
   const Params& params() const { return p_; }
@@ -260,6 +272,9 @@ class EvPlant : public EvStateLayout {
     const double u_dc_V = x[kEmf] - x[kVrc];
     Eval e;
     e.drive = drive_.operate(u.driveTauRef_Nm, drive_speed_rad_s, u_dc_V);
+    if (torque_gain_ != 1.0) [[unlikely]] {
+      e.drive = derated(u.driveTauRef_Nm, e.drive, drive_speed_rad_s, u_dc_V);
+    }
     e.torque_Nm = Drive::torque_Nm(e.drive);
     e.power_mech_W = e.torque_Nm * drive_speed_rad_s;
     e.power_dc_W = Drive::power_dc_W(e.drive);
@@ -304,10 +319,22 @@ class EvPlant : public EvStateLayout {
 
   // The same equations as evaluate() with v = 0, for the stuck crossing (twice per step).
   AtRest at_rest(const State& x, const Inputs& u) const {
-    const double torque_Nm = drive_.torque_at_rest_Nm(u.driveTauRef_Nm, x[kEmf] - x[kVrc]);
+    const double u_dc_V = x[kEmf] - x[kVrc];
+    double torque_Nm = drive_.torque_at_rest_Nm(u.driveTauRef_Nm, u_dc_V);
+    if (torque_gain_ != 1.0) [[unlikely]] {
+      torque_Nm = Drive::torque_Nm(derated(u.driveTauRef_Nm, drive_.operate(u.driveTauRef_Nm, 0.0, u_dc_V), 0.0, u_dc_V));
+    }
     const double grade_rad = body_.road().grade_rad(x[kDistance]);
     return {torque_Nm * g_over_r_ - body_.road().grade_force_N(grade_rad),
             body_.road().rolling_N(grade_rad) + body_.brake_N(torque_Nm - u.driveTauRef_Nm)};
+  }
+
+  // A derated drive: the command clamped to gain x the drive's own bound at this point.
+  typename Drive::Point derated(double tau_cmd_Nm, const typename Drive::Point& healthy, double w_rad_s,
+                                double u_dc_V) const {
+    const double bound_Nm = torque_gain_ * drive_.torque_limit_Nm(healthy, w_rad_s);
+    const double tau_Nm = std::clamp(tau_cmd_Nm, -bound_Nm, bound_Nm);
+    return tau_Nm == tau_cmd_Nm ? healthy : drive_.operate(tau_Nm, w_rad_s, u_dc_V);
   }
 
   [[gnu::always_inline]] unsigned faults(const Eval& e, const State& x) const {
@@ -374,6 +401,8 @@ class EvPlant : public EvStateLayout {
   double mass_eff_kg_ = 0.0;       // vehicle + rotor reflected
   double inv_mass_eff_kg_ = 0.0;
   double brake_inertia_kg_ = 0.0;  // after_rotor_inertia: brake_gain * J * G/r (0 otherwise)
+  double torque_gain_ = 1.0;       // derating (plant faults): 1 healthy
+  double fault_removed_J_ = 0.0;   // energy the pack's capacitors lost as plant faults shrank them
 };
 
 }  // namespace ehpt::plant

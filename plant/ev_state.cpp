@@ -6,11 +6,13 @@
 namespace ehpt::plant {
 
 EnergyAudit ev_energy_audit(const BatteryRc& battery, double mass_eff_kg, double mass_kg, const double* x0,
-                            const double* x) {
+                            const double* x, double fault_removed_J) {
   using L = EvStateLayout;
   const auto delta = [&](int i) { return x[i] - x0[i]; };
-  const double stored_out_J =
-      battery.stored_energy_J(x0[L::kEmf], x0[L::kVrc]) - battery.stored_energy_J(x[L::kEmf], x[L::kVrc]);
+  // x0 with the pack as built, x with the pack as it is now; what plant faults took from the
+  // capacitors when they shrank (a lost string, capacity fade) is no energy the pack gave out
+  const double stored_out_J = battery.healthy_stored_energy_J(x0[L::kEmf], x0[L::kVrc]) -
+                              battery.stored_energy_J(x[L::kEmf], x[L::kVrc]) - fault_removed_J;
   const double kinetic_J = 0.5 * mass_eff_kg * (x[L::kSpeed] * x[L::kSpeed] - x0[L::kSpeed] * x0[L::kSpeed]);
   const double potential_J = mass_kg * kGravity_m_s2 * delta(L::kAltitude);
   EnergyAudit a;
@@ -24,6 +26,7 @@ EnergyAudit ev_energy_audit(const BatteryRc& battery, double mass_eff_kg, double
              {"road_load_work_J", delta(L::kRoadJ)},       {"drive_losses_J", delta(L::kDriveLossJ)},
              {"battery_losses_J", delta(L::kBatteryLossJ)}, {"brake_dissipation_J", delta(L::kBrakeJ)},
              {"kinetic_energy_change_J", kinetic_J},        {"potential_energy_change_J", potential_J}};
+  if (fault_removed_J != 0.0) a.terms.push_back({"battery_removed_by_faults_J", fault_removed_J});
   return a;
 }
 

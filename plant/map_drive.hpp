@@ -90,6 +90,17 @@ class MapDrive {
   TorqueLimit torque_limit(double speed_rad_s) const;
   double efficiency(double torque_Nm, double speed_rad_s) const;
   DriveOperatingPoint operate(double torque_request_Nm, double speed_rad_s) const;
+  // Derated (a plant fault, plant/health.hpp): the request clamped to gain x the limiter's bound
+  // of the healthy point; the efficiency map still reads |tau| / tau_max of the machine as built.
+  DriveOperatingPoint derated(const DriveOperatingPoint& healthy, double torque_request_Nm, double speed_rad_s,
+                              double gain) const {
+    const double bound_Nm = gain * healthy.limit_Nm;
+    const double tau_Nm = std::clamp(torque_request_Nm, -bound_Nm, bound_Nm);
+    DriveOperatingPoint op = tau_Nm == torque_request_Nm ? healthy : operate(tau_Nm, speed_rad_s);
+    op.limit_Nm = bound_Nm;
+    op.limiting = std::abs(op.torque_Nm - torque_request_Nm) > 1e-15;
+    return op;
+  }
 
  private:
   MapDriveParams p_;

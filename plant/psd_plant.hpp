@@ -140,6 +140,15 @@ class PsdPlant {
   void observe(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx, double* z) const;
 
   EnergyAudit audit(const State& x0, const State& x) const;
+  // Plant faults, between steps only (the run's fault injector; this plant is that run's own):
+  // the pack's constants and the machines' derating, in kMachines order.
+  static constexpr std::array<const char*, 2> kMachines = {"gen", "mot"};
+  void set_health(const PlantHealth& h, const State& x) {
+    const double before_J = battery_.stored_energy_J(x[kEmf], x[kVrc]);
+    battery_.set_health(h.battery);
+    fault_removed_J_ += before_J - battery_.stored_energy_J(x[kEmf], x[kVrc]);
+    torque_gain_ = h.torque_gain;
+  }
   const PsdParams& params() const { return p_; }
   // Willis: sun (gen) speed from carrier and ring speeds.
   double sun_speed_rad_s(const State& x) const {
@@ -167,6 +176,8 @@ class PsdPlant {
   MapIce ice_;
   MapDrive gen_, mot_;
   BatteryRc battery_;
+  std::array<double, kMaxMachines> torque_gain_ = {1.0, 1.0};  // derating (plant faults): 1 healthy
+  double fault_removed_J_ = 0.0;  // energy the pack's capacitors lost as plant faults shrank them
   VehicleBody body_;
   double rho_ = 0.0;
   double g_over_r_ = 0.0, r_over_g_ = 0.0;
@@ -202,6 +213,10 @@ struct PsdPlant::Eval {
   // electric machines follow the bus within their limits
   e.gen = gen_.operate(u.genTauRef_Nm, e.sun_speed_rad_s);
   e.mot = mot_.operate(u.motTauRef_Nm, w_r);
+  if (torque_gain_[0] != 1.0 || torque_gain_[1] != 1.0) [[unlikely]] {  // derating (plant faults)
+    e.gen = gen_.derated(e.gen, u.genTauRef_Nm, e.sun_speed_rad_s, torque_gain_[0]);
+    e.mot = mot_.derated(e.mot, u.motTauRef_Nm, w_r, torque_gain_[1]);
+  }
   const double tau_g = e.gen.torque_Nm, tau_m = e.mot.torque_Nm;
   // road, grade and the friction brake that supplies what mot could not brake
   const VehicleBody::Forces f = body_.forces(e.speed_m_s, x[kDistance]);

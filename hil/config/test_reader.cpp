@@ -26,6 +26,11 @@ const char* fault_effect_name(FaultEffect e) {
     case FaultEffect::kSaturate: return "saturate";
     case FaultEffect::kLoss: return "loss";
     case FaultEffect::kNoStart: return "no_start";
+    case FaultEffect::kR0Gain: return "r0_gain";
+    case FaultEffect::kCapacityFade: return "capacity_fade";
+    case FaultEffect::kInternalShort: return "internal_short";
+    case FaultEffect::kStringLoss: return "string_loss";
+    case FaultEffect::kDerate: return "derate";
   }
   return "?";
 }
@@ -63,12 +68,18 @@ const std::vector<EffectInfo>& effects() {
       {FaultEffect::kSaturate, {"limit"}, {}},
       {FaultEffect::kLoss, {}, {}},
       {FaultEffect::kNoStart, {}, {}},
+      {FaultEffect::kR0Gain, {"gain"}, {}},
+      {FaultEffect::kCapacityFade, {"fraction"}, {}},
+      {FaultEffect::kInternalShort, {"current_A"}, {}},
+      {FaultEffect::kStringLoss, {"strings"}, {}},
+      {FaultEffect::kDerate, {"gain"}, {}},
   };
   return k;
 }
 
-constexpr std::array<std::string_view, 11> kParameters = {"value", "offset", "gain",     "sigma", "seed", "rate",
-                                                          "delay_s", "step", "period_s", "duty",  "limit"};
+constexpr std::array<std::string_view, 14> kParameters = {"value",    "offset", "gain",  "sigma",    "seed",
+                                                          "rate",     "delay_s", "step", "period_s", "duty",
+                                                          "limit",    "fraction", "current_A", "strings"};
 
 constexpr std::array<std::string_view, 8> kFigures = {"soc_start", "soc_end",    "soc_delta",
                                                       "fuel_g",    "distance_m", "energy_residual_rel",
@@ -105,10 +116,22 @@ void read_fault(Reader& r, std::size_t index, Scenario& out, Context& ctx) {
   } else {
     f.effect = info->effect;
   }
-  f.target = r.text("target", f.effect == FaultEffect::kNoStart ? "iceON" : "");
+  const bool battery_effect = is_plant_effect(f.effect) && f.effect != FaultEffect::kDerate;
+  f.target = r.text("target", f.effect == FaultEffect::kNoStart ? "iceON" : battery_effect ? "battery" : "");
   if (f.target.empty() && info != nullptr) {
-    ctx.error(r.where(), r.field("target"), "", "missing: the field of the sensor or command message it acts on "
-                                                 "(`ehpt signals SCENARIO` lists them)");
+    ctx.error(r.where(), r.field("target"), "",
+              f.effect == FaultEffect::kDerate
+                  ? "missing: the machine it derates (\"drive\" in an EV; \"gen\" or \"mot\" in a PSD hybrid)"
+                  : "missing: the field of the sensor or command message it acts on (`ehpt signals SCENARIO` lists them)");
+  }
+  if (battery_effect && f.target != "battery") {
+    ctx.error(ctx.where[r.field("target")], r.field("target"), "\"" + f.target + "\"",
+              "kind = \"" + kind + "\" acts on the pack: leave target out (or target = \"battery\")");
+  }
+  if (!is_plant_effect(f.effect) && info != nullptr && f.target == "battery") {
+    ctx.error(ctx.where[r.field("target")], r.field("target"), "\"battery\"",
+              "kind = \"" + kind + "\" acts on a message field (batSOC, battery_voltage_V, ...); the pack's own "
+              "faults are r0_gain, capacity_fade, internal_short and string_loss");
   }
   if (f.effect == FaultEffect::kNoStart && f.target != "iceON") {
     ctx.error(ctx.where[r.field("target")], r.field("target"), "\"" + f.target + "\"",
@@ -181,6 +204,14 @@ void read_fault(Reader& r, std::size_t index, Scenario& out, Context& ctx) {
   f.period_s = r.number("period_s", 0.0);
   f.duty = r.number("duty", 0.5);
   f.limit = r.number("limit", 0.0);
+  f.fraction = r.number("fraction", 0.0);
+  f.current_A = r.number("current_A", 0.0);
+  const std::int64_t strings = r.integer("strings", 0);
+  if (r.has("strings") && (strings < 1 || strings > 1000000)) {
+    ctx.error(ctx.where[r.field("strings")], r.field("strings"), std::to_string(strings),
+              "must be a whole number of parallel strings >= 1 (and fewer than battery.strings_parallel)");
+  }
+  f.strings = static_cast<int>(std::clamp<std::int64_t>(strings, 0, 1000000));
   const std::int64_t seed = r.integer("seed", static_cast<std::int64_t>(index) + 1);
   if (seed < 0) ctx.error(ctx.where[r.field("seed")], r.field("seed"), std::to_string(seed), "must be >= 0");
   f.seed = static_cast<std::uint64_t>(std::max<std::int64_t>(seed, 0));
@@ -197,6 +228,17 @@ void read_fault(Reader& r, std::size_t index, Scenario& out, Context& ctx) {
   need("period_s", f.period_s, f.period_s > 0.0 && std::isfinite(f.period_s), "must be a finite time > 0 s");
   need("duty", f.duty, f.duty > 0.0 && f.duty < 1.0, "must be in (0, 1): the fraction of each period the fault acts");
   need("limit", f.limit, f.limit >= 0.0 && std::isfinite(f.limit), "must be a finite number >= 0 (|value| is clamped to it)");
+  need("fraction", f.fraction, f.fraction > 0.0 && f.fraction < 1.0,
+       "must be in (0, 1): the share of the pack's capacity lost (0.2: 80 % remain)");
+  need("current_A", f.current_A, f.current_A > 0.0 && std::isfinite(f.current_A),
+       "must be a finite current > 0 A (the self-discharge through the short)");
+  if (f.effect == FaultEffect::kR0Gain) {
+    need("gain", f.gain, f.gain > 0.0 && std::isfinite(f.gain), "must be a finite number > 0 (R0 x gain; 2: doubled)");
+  }
+  if (f.effect == FaultEffect::kDerate) {
+    need("gain", f.gain, f.gain >= 0.0 && f.gain <= 1.0,
+         "must be in [0, 1]: the share of the machine's torque bound left (0.5: half)");
+  }
   r.finish();
   for (const FaultSpec& g : out.faults) {
     if (g.name == f.name) {
@@ -369,8 +411,10 @@ bool parse_fault_arg(const std::string& text, toml::table& out, Context& ctx) {
       return false;
     }
     const std::string key = pair.substr(0, eq), value = pair.substr(eq + 1);
-    if (key.find_first_not_of("abcdefghijklmnopqrstuvwxyz_0123456789") != std::string::npos) {
-      ctx.errors.push_back(label + ": \"" + key + "\": not a fault key (kind, target, at_s, until_s, ...)");
+    std::vector<std::string> keys = {"name", "kind", "target", "at_s", "until_s", "duration_s", "when"};
+    keys.insert(keys.end(), kParameters.begin(), kParameters.end());
+    if (std::find(keys.begin(), keys.end(), key) == keys.end()) {
+      ctx.errors.push_back(label + ": \"" + key + "\": not a fault key; " + with_hint(key, keys));
       return false;
     }
     if (out.contains(key)) {
@@ -466,7 +510,8 @@ void read_tests(const std::vector<Layer>& layers, Reader& sc, const std::vector<
 }
 
 void check_test_targets(std::span<const std::string_view> outputs, std::span<const std::string_view> sensors,
-                        std::span<const std::string_view> commands, Scenario& out, Context& ctx) {
+                        std::span<const std::string_view> commands, const PlantFaultTargets& plant, Scenario& out,
+                        Context& ctx) {
   const auto has = [](std::span<const std::string_view> v, const std::string& name) {
     return std::find(v.begin(), v.end(), name) != v.end();
   };
@@ -477,11 +522,42 @@ void check_test_targets(std::span<const std::string_view> outputs, std::span<con
                            with_hint(name, output_names));
     }
   };
+  int strings_lost = 0;  // by all string_loss faults: they may act at once
   for (std::size_t i = 0; i < out.faults.size(); ++i) {
     FaultSpec& f = out.faults[i];
     const std::string field = "fault[" + std::to_string(i) + "]";
     if (f.has_when) output(f.where, field + ".when", f.when.signal);
     if (f.target.empty()) continue;
+    if (is_plant_effect(f.effect)) {
+      f.side = FaultSide::kPlant;
+      if (f.effect != FaultEffect::kDerate) {
+        if (plant.strings_parallel <= 0) {
+          ctx.errors.push_back(f.where + ": " + field + ": kind = \"" + fault_effect_name(f.effect) +
+                               "\" acts on a vehicle's pack; this one's plant takes no plant faults");
+        } else if (f.effect == FaultEffect::kStringLoss) {
+          strings_lost += f.strings;
+          if (strings_lost >= plant.strings_parallel) {
+            ctx.errors.push_back(f.where + ": " + field + ".strings = " + std::to_string(f.strings) +
+                                 ": the pack has battery.strings_parallel = " + std::to_string(plant.strings_parallel) +
+                                 (strings_lost > f.strings ? " and the faults before lose " + std::to_string(strings_lost - f.strings) : "") +
+                                 ": at least one string must remain (an open pack is no battery left to test)");
+          }
+        }
+        continue;
+      }
+      std::vector<std::string> names(plant.machines.begin(), plant.machines.end());
+      for (std::size_t m = 0; m < plant.machines.size(); ++m) {
+        if (plant.machines[m] == f.target) f.machine = static_cast<int>(m);
+      }
+      if (names.empty()) {
+        ctx.errors.push_back(f.where + ": " + field + ": kind = \"derate\" acts on a vehicle's machine; this one's "
+                             "plant takes no plant faults");
+      } else if (f.machine < 0) {
+        ctx.errors.push_back(f.where + ": " + field + ".target = \"" + f.target +
+                             "\": not a machine of this vehicle; " + with_hint(f.target, names));
+      }
+      continue;
+    }
     if (sensors.empty() && commands.empty()) {
       ctx.errors.push_back(f.where + ": " + field + ".target = \"" + f.target +
                            "\": this vehicle has no ECU messages to fault (a rig); faults act on the sensor and "

@@ -29,27 +29,42 @@ inline constexpr double kMaxDelaySamples = 1e6;
 // The summary figures an expectation may check at the end of a run.
 std::span<const std::string_view> expect_figures();
 
-// The vehicle's part: each fault's target is a field of its sensor or command message (their
-// side set in out.faults), each expectation's signals and conditions name its outputs.
-// sensors/commands: the message's field names (empty: the vehicle has no ECU messages).
+// What a plant fault may act on in this vehicle: its pack (strings_parallel > 0) and its
+// machines, in the plant's kMachines order (plant/health.hpp). Empty: no plant faults.
+struct PlantFaultTargets {
+  int strings_parallel = 0;  // 0: no pack
+  std::vector<std::string_view> machines;
+};
+
+// A plant's: its pack and its kMachines.
+template <class Plant, class BatteryParams>
+PlantFaultTargets plant_fault_targets(const BatteryParams& battery) {
+  return {battery.strings_parallel, std::vector<std::string_view>(Plant::kMachines.begin(), Plant::kMachines.end())};
+}
+
+// The vehicle's part: each fault's target is a field of its sensor or command message, or a
+// component of the plant (their side, and a derating's machine, set in out.faults); each
+// expectation's signals and conditions name its outputs. sensors/commands: the message's
+// field names (empty: the vehicle has no ECU messages).
 void check_test_targets(std::span<const std::string_view> outputs, std::span<const std::string_view> sensors,
-                        std::span<const std::string_view> commands, Scenario& out, Context& ctx);
+                        std::span<const std::string_view> commands, const PlantFaultTargets& plant, Scenario& out,
+                        Context& ctx);
 
 // The same from the plant's signal table and the messages' field tables (msgs/fields.hpp).
 template <class Signals, class SensorFields, class CommandFields>
 void check_test_targets_of(const Signals& signals, const SensorFields& sensors, const CommandFields& commands,
-                           Scenario& out, Context& ctx) {
+                           const PlantFaultTargets& plant, Scenario& out, Context& ctx) {
   std::vector<std::string_view> o, s, c;
   for (const auto& x : signals) o.push_back(x.name);
   for (const auto& x : sensors) s.push_back(x.name);
   for (const auto& x : commands) c.push_back(x.name);
-  check_test_targets(o, s, c, out, ctx);
+  check_test_targets(o, s, c, plant, out, ctx);
 }
 template <class Signals>
 void check_test_targets_of(const Signals& signals, Scenario& out, Context& ctx) {
   std::vector<std::string_view> o;
   for (const auto& x : signals) o.push_back(x.name);
-  check_test_targets(o, {}, {}, out, ctx);
+  check_test_targets(o, {}, {}, {}, out, ctx);
 }
 
 // After the run's length is known: windows and times that fall after its end are errors.

@@ -12,8 +12,9 @@
 namespace ehpt::hil {
 
 // What a fault does to the value of its target (a field of the sensor message the plant sends
-// to the ECU, or of the command it receives). `v` is the healthy value, `t` the time since the
-// fault became active.
+// to the ECU, or of the command it receives), or to a component of the plant (the battery, a
+// machine: plant/health.hpp). `v` is the healthy value, `t` the time since the fault became
+// active.
 enum class FaultEffect {
   kStuck,         // holds the value it had when the fault became active
   kFixed,         // value
@@ -27,11 +28,18 @@ enum class FaultEffect {
   kSaturate,      // clamped to [-limit, limit]
   kLoss,          // 0 (a machine off; a flag reads false)
   kNoStart,       // the engine does not run: iceON false, its power and torque requests 0
+  // plant faults (target "battery", or a machine: "drive"; "gen", "mot")
+  kR0Gain,          // the pack's R0 x gain
+  kCapacityFade,    // the pack's capacity x (1 - fraction)
+  kInternalShort,   // a self-discharge current current_A inside the pack
+  kStringLoss,      // `strings` of the pack's parallel strings open
+  kDerate,          // the machine's torque bound x gain
 };
+inline bool is_plant_effect(FaultEffect e) { return e >= FaultEffect::kR0Gain; }
 const char* fault_effect_name(FaultEffect e);
 
-// Which message the target belongs to.
-enum class FaultSide { kSensor, kCommand };
+// Which message the target belongs to, or the plant itself.
+enum class FaultSide { kSensor, kCommand, kPlant };
 
 // A condition on a plant output, `soc_1 < 0.3` (when = ..., after = ...).
 struct SignalCondition {
@@ -56,6 +64,9 @@ struct FaultSpec {
   // the effect's parameters (those it does not use are refused at load)
   double value = 0.0, offset = 0.0, gain = 1.0, sigma = 0.0, rate = 0.0, delay_s = 0.0, step = 0.0;
   double period_s = 0.0, duty = 0.5, limit = 0.0;
+  double fraction = 0.0, current_A = 0.0;  // capacity_fade, internal_short
+  int strings = 0;                         // string_loss
+  int machine = -1;                        // derate: the index of its target in the plant's kMachines
   std::uint64_t seed = 0;  // noise: default 1 + the fault's index, so every fault has its own stream
 };
 

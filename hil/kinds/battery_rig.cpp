@@ -55,7 +55,7 @@ extern const VehicleKind kind_battery_rig{
     "battery_rig", &typeid(plant::BatteryRigParams), read_battery_rig_kind,
     [](const Scenario& sc, const SimulationOptions& opt) {
       return simulate(sc, opt,
-                      std::make_unique<const plant::BatteryRig>(sc.plant.get<plant::BatteryRigParams>()),
+                      std::make_unique<plant::BatteryRig>(sc.plant.get<plant::BatteryRigParams>()),
                       std::unique_ptr<NoController>());
     },
     [](const Scenario& sc) { return signals_of(plant::BatteryRig(sc.plant.get<plant::BatteryRigParams>())); }};

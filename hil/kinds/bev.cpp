@@ -31,7 +31,8 @@ KindRead read_bev_kind(Reader& vr, const KindInput& in, Scenario& out, Problems&
   plant::validate(p, problems);
   if (problems.empty()) plant::warn(p.drive, "drive", warnings);
   check_signals(plant::BevPlant::kSignals, out.output.signals, ctx);
-  check_test_targets_of(plant::BevPlant::kSignals, msgs::kEvSensorFieldTable, msgs::kEvCommandFieldTable, out, ctx);
+  check_test_targets_of(plant::BevPlant::kSignals, msgs::kEvSensorFieldTable, msgs::kEvCommandFieldTable,
+                        plant_fault_targets<plant::BevPlant>(p.battery), out, ctx);
   KindRead r{cycle_length(p.driver), false, true};
   out.plant = std::move(p);
   return r;
@@ -43,7 +44,7 @@ KindRead read_bev_kind(Reader& vr, const KindInput& in, Scenario& out, Problems&
 extern const VehicleKind kind_bev{
     "bev", &typeid(plant::BevParams), read_bev_kind,
     [](const Scenario& sc, const SimulationOptions& opt) {
-      return simulate(sc, opt, std::make_unique<const plant::BevPlant>(sc.plant.get<plant::BevParams>()),
+      return simulate(sc, opt, std::make_unique<plant::BevPlant>(sc.plant.get<plant::BevParams>()),
                       std::make_unique<ecu::EvFollower>());
     },
     [](const Scenario& sc) { return signals_of(plant::BevPlant(sc.plant.get<plant::BevParams>())); }};

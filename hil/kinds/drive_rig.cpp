@@ -60,7 +60,7 @@ KindRead read_drive_rig_kind(Reader& vr, const KindInput& in, Scenario& out, Pro
 extern const VehicleKind kind_drive_rig{
     "drive_rig", &typeid(plant::DriveRigParams), read_drive_rig_kind,
     [](const Scenario& sc, const SimulationOptions& opt) {
-      return simulate(sc, opt, std::make_unique<const plant::DriveRig>(sc.plant.get<plant::DriveRigParams>()),
+      return simulate(sc, opt, std::make_unique<plant::DriveRig>(sc.plant.get<plant::DriveRigParams>()),
                       std::unique_ptr<NoController>());
     },
     [](const Scenario& sc) { return signals_of(plant::DriveRig(sc.plant.get<plant::DriveRigParams>())); }};

@@ -44,7 +44,8 @@ KindRead read_machine_ev(Reader& vr, const KindInput& in, Scenario& out, Problem
     }
   }
   check_signals(plant::EvMachinePlant<Drive>::kSignals, out.output.signals, ctx);
-  check_test_targets_of(plant::EvMachinePlant<Drive>::kSignals, msgs::kEvSensorFieldTable, msgs::kEvCommandFieldTable, out, ctx);
+  check_test_targets_of(plant::EvMachinePlant<Drive>::kSignals, msgs::kEvSensorFieldTable, msgs::kEvCommandFieldTable,
+                        plant_fault_targets<plant::EvMachinePlant<Drive>>(p.battery), out, ctx);
   KindRead r{cycle_length(p.driver), false, true};
   out.plant = std::move(p);
   return r;

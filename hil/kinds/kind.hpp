@@ -41,7 +41,7 @@ std::span<const VehicleKind* const> all_kinds();
 // One kind: its plant (and ECU) from the scenario, with the scenario's solver.
 template <class Plant, class Controller = NoController>
 inline std::unique_ptr<Simulation> simulate(const Scenario& sc, const SimulationOptions& opt,
-                                     std::unique_ptr<const Plant> plant, std::unique_ptr<Controller> controller,
+                                     std::unique_ptr<Plant> plant, std::unique_ptr<Controller> controller,
                                      double fuel_density_kg_m3 = 0.0) {
   if constexpr (!std::is_same_v<Controller, NoController> && !is_codec_ecu<Controller>) {
     // every built-in ECU talks through the codec seam (a pass-through unless ecu.codec = "can")

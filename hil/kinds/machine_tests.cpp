@@ -60,7 +60,7 @@ extern const VehicleKind kind_pm_drive_test{
     "pm_drive_test", &typeid(plant::PmDriveTestParams), read_pm_test,
     [](const Scenario& sc, const SimulationOptions& opt) {
       return simulate(sc, opt,
-                      std::make_unique<const plant::PmDriveTest>(sc.plant.get<plant::PmDriveTestParams>()),
+                      std::make_unique<plant::PmDriveTest>(sc.plant.get<plant::PmDriveTestParams>()),
                       std::unique_ptr<NoController>());
     },
     [](const Scenario& sc) {
@@ -72,7 +72,7 @@ extern const VehicleKind kind_am_drive_test{
     "am_drive_test", &typeid(plant::AmDriveTestParams), read_am_test,
     [](const Scenario& sc, const SimulationOptions& opt) {
       return simulate(sc, opt,
-                      std::make_unique<const plant::AmDriveTest>(sc.plant.get<plant::AmDriveTestParams>()),
+                      std::make_unique<plant::AmDriveTest>(sc.plant.get<plant::AmDriveTestParams>()),
                       std::unique_ptr<NoController>());
     },
     [](const Scenario& sc) {

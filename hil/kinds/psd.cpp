@@ -88,7 +88,8 @@ KindRead read_psd_kind(Reader& vr, const KindInput& in, Scenario& out, Problems&
     }
   }
   check_signals(plant::PsdPlant::kSignals, out.output.signals, ctx);
-  check_test_targets_of(plant::PsdPlant::kSignals, msgs::kPsdSensorFieldTable, msgs::kPsdCommandFieldTable, out, ctx);
+  check_test_targets_of(plant::PsdPlant::kSignals, msgs::kPsdSensorFieldTable, msgs::kPsdCommandFieldTable,
+                        plant_fault_targets<plant::PsdPlant>(p.battery), out, ctx);
   KindRead r{cycle_length(p.driver), false, true};
   // MBecu's filters and integrators step with the ECU period load_scenario settles on
   r.set_ecu_period = [](Scenario& s, double period_s) { s.ecu.get<ecu::PsdEcuParams>().period_s = period_s; };
@@ -105,7 +106,7 @@ extern const VehicleKind kind_psd{
     [](const Scenario& sc, const SimulationOptions& opt) {
       const auto& p = sc.plant.get<plant::PsdParams>();
       const auto& e = sc.ecu.get<ecu::PsdEcuParams>();
-      return simulate(sc, opt, std::make_unique<const plant::PsdPlant>(p), std::make_unique<ecu::PsdEcu>(e, e.period_s),
+      return simulate(sc, opt, std::make_unique<plant::PsdPlant>(p), std::make_unique<ecu::PsdEcu>(e, e.period_s),
                       p.ice.fuel_density_kg_m3);
     },
     [](const Scenario& sc) { return signals_of(plant::PsdPlant(sc.plant.get<plant::PsdParams>())); }};

@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Faults at the seams where a real one acts (docs/testing.md): on the sensor message the plant
-// sends its ECU (after plant.sense, at each sample) and on the command it receives (between the
-// ECU's command and the plant, at every step). Built at start-up from the scenario's
+// sends its ECU (after plant.sense, at each sample), on the command it receives (between the
+// ECU's command and the plant, at every step) and in the plant itself (its pack, its machines:
+// plant/health.hpp, set on the run's own plant where a plant fault starts or ends). Built at start-up from the scenario's
 // FaultSpecs; the run phase allocates nothing, takes no lock and draws its noise from one
 // seeded generator per fault, so a faulted run is the same bit for bit every time (and in a
 // replay of its session).
@@ -22,6 +23,7 @@
 
 #include "hil/config/test_spec.hpp"
 #include "msgs/fields.hpp"
+#include "plant/health.hpp"
 #include "plant/signals.hpp"
 #include "solvers/plant.hpp"
 
@@ -106,9 +108,15 @@ class FaultInjector {
   using Outputs = typename Plant::Outputs;
   using Inputs = typename Plant::Inputs;
 
-  // Start-up. ecu_ratio: plant steps per ECU sample (a sensor delay counts samples).
-  FaultInjector(std::span<const FaultSpec> specs, const Plant& plant, double step_s, std::int64_t ecu_ratio)
-      : h_s_(step_s) {
+  // A plant that takes plant faults (plant/health.hpp).
+  static constexpr bool kTakesHealth = requires(Plant& p, const plant::PlantHealth& h, const typename Plant::State& x) {
+    p.set_health(h, x);
+  };
+
+  // Start-up. ecu_ratio: plant steps per ECU sample (a sensor delay counts samples). plant: the
+  // run's own, which plant faults change (between steps: apply_health); it outlives this.
+  FaultInjector(std::span<const FaultSpec> specs, Plant& plant, double step_s, std::int64_t ecu_ratio)
+      : h_s_(step_s), plant_(&plant) {
     faults_.resize(specs.size());
     spans_.resize(specs.size());
     for (std::size_t i = 0; i < specs.size(); ++i) {
@@ -127,6 +135,10 @@ class FaultInjector {
         f.period_steps = std::max<std::int64_t>(1, std::llround(s.period_s / h_s_));
         f.on_steps = std::clamp<std::int64_t>(std::llround(s.duty * static_cast<double>(f.period_steps)), 1,
                                               f.period_steps);
+      }
+      if (s.side == FaultSide::kPlant) {
+        plant_bits_ |= f.bit;  // (the reader refused plant faults on plants that take none)
+        continue;
       }
       if constexpr (solvers::PlantWithSensors<Plant>) {
         using Sensors = typename Plant::Sensors;
@@ -204,8 +216,35 @@ class FaultInjector {
       }
     }
     next_change_ = next;
+    if ((mask & plant_bits_) != (mask_ & plant_bits_)) health_due_ = true;
     mask_ = mask;
     return mask;
+  }
+
+  // Whether a plant fault started or ended at the grid point begun last: apply_health is due
+  // before its samples and its step.
+  bool health_due() const { return health_due_; }
+  // Run phase, where health_due(): the plant's health from the plant faults acting now, set on
+  // the run's plant at its state x (what the pack's capacitors lose is booked in its audit).
+  void apply_health(const typename Plant::State& x) {
+    health_due_ = false;
+    if constexpr (kTakesHealth) {
+      static_assert(Plant::kMachines.size() <= plant::kMaxMachines);
+      plant::PlantHealth h;
+      for (const Fault& f : faults_) {
+        if (!f.active || (f.bit & plant_bits_) == 0) continue;
+        const FaultSpec& s = f.spec;
+        switch (s.effect) {
+          case FaultEffect::kR0Gain: h.battery.r0_gain *= s.gain; break;
+          case FaultEffect::kCapacityFade: h.battery.capacity_gain *= 1.0 - s.fraction; break;
+          case FaultEffect::kInternalShort: h.battery.short_A += s.current_A; break;
+          case FaultEffect::kStringLoss: h.battery.strings_lost += s.strings; break;
+          case FaultEffect::kDerate: h.torque_gain[static_cast<std::size_t>(s.machine)] *= s.gain; break;
+          default: break;
+        }
+      }
+      plant_->set_health(h, x);
+    }
   }
   // The spans at the end: those still acting close at the last grid point begun.
   std::vector<FaultSpan> final_spans() const {
@@ -340,11 +379,19 @@ class FaultInjector {
       case FaultEffect::kSaturate: v = std::clamp(healthy, -s.limit, s.limit); break;
       case FaultEffect::kLoss: v = 0.0; break;
       case FaultEffect::kNoStart: v = 0.0; break;
+      case FaultEffect::kR0Gain:  // plant faults: apply_health, not a value
+      case FaultEffect::kCapacityFade:
+      case FaultEffect::kInternalShort:
+      case FaultEffect::kStringLoss:
+      case FaultEffect::kDerate: return false;
     }
     return true;
   }
 
   double h_s_;
+  Plant* plant_;
+  unsigned plant_bits_ = 0;  // the plant faults' bits
+  bool health_due_ = false;
   std::vector<Fault> faults_;
   std::vector<FaultSpan> spans_;
   unsigned mask_ = 0;

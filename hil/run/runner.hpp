@@ -362,6 +362,10 @@ class Runner {
   [[gnu::always_inline]] void begin_faults(std::int64_t n) {
     if (faults_ != nullptr) [[unlikely]] {
       fault_mask_ = faults_->begin_step(n);
+      if (faults_->health_due()) {  // a plant fault starts or ends: the plant changes here
+        faults_->apply_health(x_);
+        dx_observed_step_ = -1;
+      }
     }
   }
   // Run phase: the command faults on the command in force at grid point n.

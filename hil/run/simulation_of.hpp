@@ -14,8 +14,9 @@ namespace ehpt::hil {
 template <class Plant, class Integrator, class Controller = NoController>
 class SimulationOf final : public Simulation {
  public:
-  // plant and controller are owned here; the runner refers to them.
-  SimulationOf(const Scenario& sc, const SimulationOptions& opt, std::unique_ptr<const Plant> plant,
+  // plant and controller are owned here; the runner refers to them (and the fault injector,
+  // the one writer of the plant: its health, between steps).
+  SimulationOf(const Scenario& sc, const SimulationOptions& opt, std::unique_ptr<Plant> plant,
                std::unique_ptr<Controller> controller, double fuel_density_kg_m3 = 0.0)
       : plant_(std::move(plant)),
         controller_(std::move(controller)),
@@ -129,7 +130,7 @@ class SimulationOf final : public Simulation {
     return false;
   }
 
-  std::unique_ptr<const Plant> plant_;
+  std::unique_ptr<Plant> plant_;  // this run's own: its plant faults (FaultInjector) change it between steps
   std::unique_ptr<Controller> controller_;
   double fuel_density_kg_m3_;
   std::vector<SignalInfo> signals_;
