@@ -77,6 +77,7 @@ EHPT_PY_ARG(FloatDict, "dict[str, float]")
 EHPT_PY_ARG(ArrayDict, "dict[str, numpy.ndarray]")
 EHPT_PY_ARG(StatsDict, "dict[str, int | float | None]")
 EHPT_PY_ARG(SummaryDict, "dict[str, Any]")
+EHPT_PY_ARG(VerdictDict, "dict[str, Any] | None")
 EHPT_PY_ARG(ParamsDict, "dict[str, Any] | None")
 EHPT_PY_ARG(StrList, "list[str]")
 EHPT_PY_ARG(SensorsValue, "PsdSensors | EvSensors")
@@ -951,6 +952,17 @@ class PySimulation {
     return StatsDict(d);
   }
 
+  // summary["test"] of the run as it stands (None: no test); "incomplete" until finished.
+  VerdictDict verdict() const {
+    hil::Simulation& s = sim();
+    const std::string text = hil::test_verdict_json(sc_, s);
+    if (text.empty()) return VerdictDict(py::none());
+    py::dict d = json_loads(text);
+    if (!s.finished()) d["verdict"] = "incomplete";  // never "passed" for a run not yet done
+    d["finished"] = s.finished();
+    return VerdictDict(d);
+  }
+
   bool finished() const { return sim().finished(); }
   double time_s() const { return sim().time_s(); }
   std::int64_t step_index() const { return sim().step_index(); }
@@ -1152,6 +1164,12 @@ PYBIND11_MODULE(ehpt, m) {
       .def("stats", &PySimulation::stats,
            "Counters and figures of the run so far: steps_done, events, chattering_steps, newton_failures,\n"
            "fault, fault_time_s, rows_dropped, distance_m, soc_start, soc_end, fuel_g (None: not applicable).")
+      .def("verdict", &PySimulation::verdict,
+           "A test's verdict as it stands (None: the scenario has no [[fault]] or [[expect]]): the dict\n"
+           "ehpt.run gives as summary[\"test\"] (verdict, first_failure, expectations with message, time\n"
+           "and value, faults with their spans), judged as if the run ended at the last step taken, and\n"
+           "finished. Before the end verdict is \"incomplete\" (a window not reached yet fails); at the\n"
+           "end it equals ehpt.run's. Stepping on after a call is unaffected.")
       .def_property_readonly("finished", &PySimulation::finished, "True once every step is taken.")
       .def_property_readonly("time_s", &PySimulation::time_s, "Simulation time of the next step, s (step_index * step_s).")
       .def_property_readonly("step_index", &PySimulation::step_index, "Steps taken so far.")

@@ -769,6 +769,11 @@ void conclude(const Scenario& sc, const Report& r, const ExternalDriver* driver,
 
 }  // namespace
 
+std::string test_verdict_json(const Scenario& sc, Simulation& sim) {
+  if (!sc.test.is_test) return "";
+  return test_json(verdict_of(sc, report_of(sim, Streamed{}))).str();
+}
+
 MemoryRun run_in_memory(const Scenario& sc, const std::atomic<int>* stop) {
   MemoryRun res;
   const std::vector<SignalInfo> signals = scenario_signals(sc);

@@ -138,6 +138,12 @@ struct MemoryRun : BatchResult {
 };
 MemoryRun run_in_memory(const Scenario& scenario, const std::atomic<int>* stop = nullptr);
 
+// A test's verdict on a simulation as it stands: summary.json's "test" object (JSON text), its
+// expectations judged as if the run ended at its last step (a window not reached yet fails).
+// Empty if the scenario is no test. The simulation steps on unchanged (the Python module's
+// Simulation.verdict()).
+std::string test_verdict_json(const Scenario& scenario, Simulation& sim);
+
 // Fault bits -> words ("SOC left its window, ...").
 std::string fault_text(unsigned fault);
 

@@ -183,11 +183,12 @@ class ExpectationChecker {
     }
   }
 
-  // After the run (it ended at its last observed grid point): every outcome, in the specs'
-  // order (figures are left for judge_figure).
+  // Every outcome, in the specs' order, as if the run ended at its last observed grid point
+  // (figures are left for judge_figure). Nothing of the checker changes: a caller may ask
+  // mid-run (Simulation.verdict() in Python) and step on.
   std::span<const ExpectOutcome> finish() {
-    for (Item& it : items_) {
-      ExpectOutcome& o = it.outcome;
+    for (const Item& it : items_) {
+      ExpectOutcome o = it.outcome;
       if (!it.decided) {
         const ExpectWindow w = it.spec->window;
         if (w == ExpectWindow::kWithin && o.event_step < 0) {

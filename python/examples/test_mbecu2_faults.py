@@ -69,3 +69,33 @@ def test_a_bad_fault_is_an_error_naming_it():
     assert 'did you mean "stuck"' in str(err.value)
     with pytest.raises(TypeError):
         ehpt.run("psecu2_nedc", faults="kind=stuck target=batSOC")
+
+
+def test_a_simulation_gives_its_verdict_as_it_stands_and_at_the_end_the_runs():
+    path = os.path.join(TESTS, "battery_r0_doubled.toml")
+    sim = ehpt.Simulation(path)
+    sim.step(50000)  # 50 s of 400
+    mid = sim.verdict()
+    assert mid["verdict"] == "incomplete" and mid["finished"] is False  # never "passed" before the end
+    assert not mid["all_expectations_held"]  # the windows to the end are not reached yet
+    while not sim.finished:
+        sim.step(sim.chunk_steps)
+    end = sim.verdict()
+    assert end["finished"] is True and end["verdict"] == "passed"
+    r = ehpt.run(path)
+    want = dict(r.summary["test"], finished=True)
+    assert end == want  # the same verdict as the batch run's, every expectation and span
+    assert [f["kind"] for f in end["faults"]] == ["r0_gain"] and end["faults"][0]["active_steps"] == 400001
+    # a verdict mid-run changed nothing: the same final outputs as a run never asked
+    plain = ehpt.Simulation(path)
+    plain.run()
+    assert plain.outputs() == sim.outputs()
+    assert ehpt.Simulation("psecu2_nedc", set=SHORT).verdict() is None  # no test, no verdict
+
+
+def test_a_failing_simulation_names_its_first_failure():
+    sim = ehpt.Simulation(os.path.join(TESTS, "soc_stuck_written_to_fail.toml"))
+    sim.run()
+    v = sim.verdict()
+    assert v["verdict"] == "passed" and v["expect_fail"] is True  # written to fail: it failed
+    assert v["all_expectations_held"] is False and v["first_failure"].startswith("soc_band:")
