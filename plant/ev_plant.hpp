@@ -217,11 +217,13 @@ class EvPlant : public EvStateLayout {
   }
   // The runner's observation at a grid point it does not record (solvers/plant.hpp), from one
   // evaluation: the outputs of OutputSet::kObserved (observation.hpp; the other fields of y are
-  // left as they were), dx/dt and the crossing functions z.
+  // left as they were), dx/dt and the crossing functions z. With kSet = kAll every field of y,
+  // bit for bit outputs(): what a test's expectations read at every step.
+  template <OutputSet kSet = OutputSet::kObserved>
   void observe(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx, double* z) const {
     static_assert(kObservationTested<EvPlant>, "list the plant in ObservedPlants (plant/observation.hpp)");
     const Eval e = evaluate(x, m, u);
-    outputs_from<OutputSet::kObserved>(e, t_s, x, m, u, y);
+    outputs_from<kSet>(e, t_s, x, m, u, y);
     derivatives_from(e, x, dx);
     crossings(t_s, x, m, u, z);
   }

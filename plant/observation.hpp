@@ -10,6 +10,8 @@
 // expression for both and the two cannot drift apart; tests/plant/observation_test.cpp checks,
 // for every plant of ObservedPlants over a whole cycle, that observe() fills exactly those
 // fields, bit for bit as outputs(), and dx/dt and z as derivatives() and crossings().
+// observe<OutputSet::kAll>() is the same with every field: what the runner takes at each step
+// of a test (expectations read any output), still one evaluation for y, dx/dt and z.
 //
 // Every plant with observe() is listed in ObservedPlants below: its observe() asserts it
 // (static_assert(kObservationTested<...>)), and the test runs one case per entry of the list

@@ -214,14 +214,19 @@ void PsdPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs&
 
 // outputs_from(), derivatives_from() and crossings() from one evaluation (while stuck,
 // crossings() would evaluate again: the same e).
+template <OutputSet kSet>
 void PsdPlant::observe(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx,
                        double* z) const {
   static_assert(kObservationTested<PsdPlant>, "list the plant in ObservedPlants (plant/observation.hpp)");
   const Eval e = eval(t_s, x, m, u);
-  outputs_from<OutputSet::kObserved>(e, t_s, x, m, u, y);
+  outputs_from<kSet>(e, t_s, x, m, u, y);
   derivatives_from(e, x, dx);
   z[0] = m.motion != Motion::kStuck ? VehicleBody::moving_crossing(m.motion, x[kRingSpeed]) : stuck_crossing(e);
 }
+template void PsdPlant::observe<OutputSet::kObserved>(double, const State&, const Modes&, const Inputs&, Outputs&,
+                                                      State&, double*) const;
+template void PsdPlant::observe<OutputSet::kAll>(double, const State&, const Modes&, const Inputs&, Outputs&, State&,
+                                                 double*) const;
 
 double PsdPlant::kinetic_energy_J(const State& x) const {
   const double w_c = x[kIceSpeed], w_r = x[kRingSpeed];

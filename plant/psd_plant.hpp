@@ -136,7 +136,9 @@ class PsdPlant {
   // were), dx/dt and the crossing functions z, each bit for bit what outputs(), derivatives()
   // and crossings() give at the same point (one outputs_from for both, observation.hpp). The
   // runner hands dx and z to the next step (its first stage, and the crossings at its start:
-  // two evaluations while stuck, one saved).
+  // two evaluations while stuck, one saved). With kSet = kAll every field of y, bit for bit
+  // outputs(): what a test's expectations read at every step, with dx/dt and z as above.
+  template <OutputSet kSet = OutputSet::kObserved>
   void observe(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx, double* z) const;
 
   EnergyAudit audit(const State& x0, const State& x) const;

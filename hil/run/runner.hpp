@@ -28,6 +28,7 @@
 #include "hil/run/port.hpp"
 #include "hil/run/recorder.hpp"
 #include "msgs/stamp.hpp"
+#include "plant/observation.hpp"
 #include "plant/signals.hpp"
 #include "solvers/event_stepper.hpp"
 
@@ -333,7 +334,7 @@ class Runner {
         z_observed_ = true;
         y_full_ = false;
       } else {
-        rare_outputs_at(n);
+        rare_observe_all(n);
       }
     } else {
       outputs_at(n);
@@ -403,6 +404,21 @@ class Runner {
   // The same out of line, where a plant with an observation needs them (a recorded row, the end
   // of a run() call): the step's loop stays small.
   [[gnu::noinline]] void rare_outputs_at(std::int64_t n) { outputs_at(n); }
+  // The full outputs at grid point n with dx/dt and the crossing functions from the same
+  // evaluation (a plant's observe<kAll>), for the next step's start as observe() gives them: a
+  // test reads every output at every step, and the crossings there would cost another call.
+  [[gnu::noinline]] void rare_observe_all(std::int64_t n) {
+    if constexpr (requires(const Plant& p, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx,
+                           double* z) { p.template observe<plant::OutputSet::kAll>(0.0, x, m, u, y, dx, z); }) {
+      plant_.template observe<plant::OutputSet::kAll>(stepper_.time_s(n), x_, m_, u(), y_, dx_observed_,
+                                                      z_observed_values_.data());
+      dx_observed_step_ = n;
+      z_observed_ = true;
+      y_full_ = true;
+    } else {
+      outputs_at(n);
+    }
+  }
   // Run phase: the full outputs at grid point n if only the observation was taken there (the
   // same x, modes and inputs: nothing has moved since observe(n) in this run() call).
   void complete_outputs(std::int64_t n) {

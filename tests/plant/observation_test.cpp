@@ -125,7 +125,22 @@ Seen compare_over_run(const Plant& plant, Ecu& ecu, std::int64_t steps, std::int
     plant.derivatives(t, x, m, u, dx_deriv);
     plant.crossings(t, x, m, u, z_full);
     plant.observe(t, x, m, u, obs, dx_obs, z_obs);
+    // every field, with the same dx/dt and z: what the runner takes where a test reads them all
+    Outputs all{};
+    State dx_all;
+    double z_all[kZ];
+    plant.template observe<plant::OutputSet::kAll>(t, x, m, u, all, dx_all, z_all);
     bool same = true;
+    for (const auto& s : plant.signals()) {
+      if (!same_bits(all.*s.member, full.*s.member)) {
+        ADD_FAILURE() << s.name << " at t = " << t << ": observe<kAll> " << all.*s.member << ", outputs "
+                      << full.*s.member;
+        same = false;
+      }
+    }
+    for (int i = 0; i < Plant::kNumStates; ++i) same = same && same_bits(dx_all[i], dx_full[i]);
+    for (int i = 0; i < kZ; ++i) same = same && same_bits(z_all[i], z_full[i]);
+    EXPECT_TRUE(same) << "observe<kAll> at t = " << t << ": dx/dt or z differ from outputs() and crossings()";
     for (const auto& s : plant.signals()) {
       const bool is_observed = std::find(observed.begin(), observed.end(), s.member) != observed.end();
       if (is_observed ? !same_bits(obs.*s.member, full.*s.member) : !same_bits(obs.*s.member, kUntouched)) {
