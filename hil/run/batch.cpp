@@ -467,6 +467,7 @@ TestVerdict verdict_of(const Scenario& sc, const Report& r) {
     v.first_failure = r.st.fault != 0 ? "the run stopped on a plant fault: " + fault_text(r.st.fault) : "the run was interrupted";
   }
   v.passed = v.expect_fail ? !v.all_held : v.all_held;
+  if (v.expect_fail && v.all_held) v.first_failure = "written to fail (expect_fail = true), but every expectation held";
   return v;
 }
 

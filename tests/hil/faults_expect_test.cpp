@@ -376,6 +376,8 @@ TEST(Expect, FiguresAtTheEndAndExpectFailTurnsTheVerdict) {
   EXPECT_FALSE(x.all_held);
   const TestVerdict y = verdict("[test]\nexpect_fail = true\n[[expect]]\nfigure = \"distance_m\"\nmax = 100\n");
   EXPECT_FALSE(y.passed);  // written to fail, but it held
+  // ... and says so where a failure is read (ehpt run --quiet, a sweep's message, results.csv)
+  EXPECT_EQ(y.first_failure, "written to fail (expect_fail = true), but every expectation held");
 }
 
 // --- load-time rules: each one named with file:line and a hint ---
