@@ -181,9 +181,10 @@ bool run_done(const SweepFolder& f, const std::string& id, const RunOutcome& o) 
 bool run_failed(const RunOutcome& o) { return o.recorded && o.exit_code != 0; }
 
 // What the run's stderr says, on one line, the campaign's locations in place of --set labels.
-std::string failure_message(const SweepFolder& f, const PlannedRun& run, int code) {
+std::string failure_message(const SweepFolder& f, const std::string& run_id, const std::vector<CampaignOverride>& overrides,
+                            int code) {
   std::string text, reason;
-  (void)io::read_text_file(f.log_file(run.id), text, reason);
+  (void)io::read_text_file(f.log_file(run_id), text, reason);
   std::string message;
   std::istringstream lines(text);
   for (std::string line; std::getline(lines, line);) {
@@ -199,7 +200,7 @@ std::string failure_message(const SweepFolder& f, const PlannedRun& run, int cod
   if (message.empty()) {
     message = code > 128 ? "killed by signal " + std::to_string(code - 128) : "exit " + std::to_string(code);
   }
-  return blame(message, run.overrides);
+  return blame(message, overrides);
 }
 
 // The run's log says its folder is locked by another ehpt run (DirLock's message).

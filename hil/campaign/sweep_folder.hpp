@@ -67,7 +67,8 @@ bool run_failed(const RunOutcome& o);
 // What the run's stderr (its log) says, on one line (warnings and the loader's closing count
 // left out, at most ~2000 characters), the campaign's locations in place of --set labels; if
 // it says nothing, "exit N" or "killed by signal N" (code > 128).
-std::string failure_message(const SweepFolder& f, const PlannedRun& run, int code);
+std::string failure_message(const SweepFolder& f, const std::string& run_id, const std::vector<CampaignOverride>& overrides,
+                            int code);
 
 // The run's log says its folder is locked by another ehpt run (DirLock's message).
 bool folder_busy(const SweepFolder& f, const PlannedRun& run);

@@ -105,7 +105,7 @@ bool merge_results(const SweepPlan& plan, const SweepFolder& f, SweepTally& tall
     const Row& row = rows[i];
     const std::string& status = row.status;
     std::map<std::string, std::string> set_of;
-    for (const CampaignOverride& o : run.overrides) set_of[o.key] = o.value;
+    for (const CampaignOverride& o : overrides_of(c, run)) set_of[o.key] = o.value;
     csv += run.id + "," + csv_field(c.scenarios[run.scenario].name);
     for (const std::string& k : swept) {
       const auto it = set_of.find(k);

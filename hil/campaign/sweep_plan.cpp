@@ -5,11 +5,17 @@
 #include <time.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
-#include <map>
 #include <ostream>
 #include <set>
 #include <sstream>
+#include <string_view>
+#include <thread>
+#include <unordered_map>
+
+#include "hil/campaign/sweep_pool.hpp"
 
 namespace ehpt::hil {
 
@@ -53,10 +59,52 @@ std::string blame(std::string message, const std::vector<CampaignOverride>& over
   return message;
 }
 
-// Loads the campaign and every run's scenario (its files give the run's id). A problem that
-// comes from the campaign's [set], [grid] or [output], or from a scenario itself, is a problem
-// of the campaign: reported, nothing runs (2). A variant whose value the scenario refuses is
-// a run that will fail alone (its ehpt run says why, exit 2).
+namespace {
+
+// Run index of the campaign: its id, and what makes the campaign invalid (none: it is valid,
+// or only this variant's value is refused, and it fails alone). cache: the worker's own.
+PlannedRun plan_one(const Campaign& c, std::uint64_t index, LoadCache& cache, std::vector<std::string>* problems) {
+  const std::size_t not_variant = c.fixed.size() + c.grid.size();
+  hil::CampaignRun r = hil::campaign_run(c, index);
+  std::vector<std::string> sets;
+  sets.reserve(r.overrides.size());
+  for (const CampaignOverride& o : r.overrides) sets.push_back(o.set_text());
+  hil::Scenario sc;
+  std::vector<std::string> load_errors;
+  if (!hil::load_scenario(c.scenarios[r.scenario].path, sets, sc, load_errors, cache) && problems != nullptr) {
+    // the variant's fault if the run loads without the variant's values (a cross-field check
+    // such as ecu.period_s against solver.step_s names neither): it then fails alone
+    bool variant_refused = false;
+    if (r.overrides.size() > not_variant) {
+      const std::vector<std::string> without(sets.begin(), sets.begin() + static_cast<std::ptrdiff_t>(not_variant));
+      hil::Scenario probe;
+      std::vector<std::string> probe_errors;
+      variant_refused = hil::load_scenario(c.scenarios[r.scenario].path, without, probe, probe_errors, cache);
+    }
+    if (!variant_refused) {
+      std::string with;  // the values of this run, for a message that names none of them
+      for (std::size_t k = c.fixed.size(); k < not_variant; ++k) {
+        with += (with.empty() ? "" : ", ") + r.overrides[k].set_text() + " (" + r.overrides[k].where + ")";
+      }
+      for (const std::string& e : load_errors) {
+        std::string m = c.scenarios[r.scenario].name + ": " + blame(e, r.overrides);
+        if (m == c.scenarios[r.scenario].name + ": " + e && !with.empty()) m += " [in the run with " + with + "]";
+        problems->push_back(std::move(m));
+      }
+    }
+  }
+  return PlannedRun{index, r.scenario, hil::run_id(sc.inputs, r.overrides)};
+}
+
+}  // namespace
+
+// Loads the campaign and every run's scenario (its files give the run's id), on every CPU
+// this process may use: each worker plans a contiguous block of runs with its own cache of
+// the files (each read and parsed once per worker), so that 10^5 runs plan in seconds. A
+// problem that comes from the campaign's [set], [grid] or [output], or from a scenario itself,
+// is a problem of the campaign: reported (in run order, each once), nothing runs (2). A
+// variant whose value the scenario refuses is a run that will fail alone (its ehpt run says
+// why, exit 2).
 int plan_sweep(const std::string& path, SweepPlan& plan, bool progress, std::ostream& err) {
   std::vector<std::string> errors;
   if (!hil::load_campaign(path, plan.campaign, errors)) {
@@ -65,56 +113,54 @@ int plan_sweep(const std::string& path, SweepPlan& plan, bool progress, std::ost
     return 2;
   }
   const Campaign& c = plan.campaign;
-  const std::uint64_t n = hil::campaign_run_count(c);
-  const std::size_t not_variant = c.fixed.size() + c.grid.size();
+  const std::uint64_t n = hil::campaign_run_count(c);  // at most kMaxCampaignRuns: a size_t
+  plan.runs.assign(static_cast<std::size_t>(n), PlannedRun{});
+  const std::size_t workers = static_cast<std::size_t>(std::clamp<std::uint64_t>(n / 64, 1, static_cast<std::uint64_t>(usable_cpus())));
+  const std::uint64_t per = (n + workers - 1) / workers;
+  std::vector<std::vector<std::string>> found(workers);  // each worker's problems, in run order
+  std::atomic<std::uint64_t> done{0};
+  const auto work = [&](std::size_t w) {
+    LoadCache cache;
+    const std::uint64_t begin = std::min<std::uint64_t>(n, w * per), end = std::min<std::uint64_t>(n, begin + per);
+    for (std::uint64_t i = begin; i < end; ++i) {
+      plan.runs[static_cast<std::size_t>(i)] = plan_one(c, i, cache, &found[w]);
+      done.fetch_add(1, std::memory_order_relaxed);
+    }
+  };
+  {
+    std::vector<std::thread> threads;
+    for (std::size_t w = 1; w < workers; ++w) threads.emplace_back(work, w);
+    // this thread plans block 0, then shows the progress until the others are done
+    const double t0 = now_s();
+    work(0);
+    bool shown = false;
+    while (progress && done.load() < n) {
+      if (now_s() - t0 > 0.5) {
+        err << "\rplanning: " << done.load() << "/" << n << " runs loaded" << std::flush;
+        shown = true;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    for (std::thread& t : threads) t.join();
+    if (progress && (shown || now_s() - t0 > 0.5)) err << "\r\033[K" << std::flush;
+  }
   std::vector<std::string> problems;
   std::set<std::string> problem_set;
-  std::map<std::string, std::uint64_t> ids;
-  plan.runs.reserve(static_cast<std::size_t>(n));
-  const double t0 = now_s();
-  double shown = t0;
-  for (std::uint64_t i = 0; i < n; ++i) {
-    hil::CampaignRun r = hil::campaign_run(c, i);
-    std::vector<std::string> sets;
-    for (const CampaignOverride& o : r.overrides) sets.push_back(o.set_text());
-    hil::Scenario sc;
-    std::vector<std::string> load_errors;
-    if (!hil::load_scenario(c.scenarios[r.scenario].path, sets, sc, load_errors)) {
-      // the variant's fault if the run loads without the variant's values (a cross-field check
-      // such as ecu.period_s against solver.step_s names neither): it then fails alone
-      bool variant_refused = false;
-      if (r.overrides.size() > not_variant) {
-        const std::vector<std::string> without(sets.begin(), sets.begin() + static_cast<std::ptrdiff_t>(not_variant));
-        hil::Scenario probe;
-        std::vector<std::string> probe_errors;
-        variant_refused = hil::load_scenario(c.scenarios[r.scenario].path, without, probe, probe_errors);
-      }
-      if (!variant_refused) {
-        std::string with;  // the values of this run, for a message that names none of them
-        for (std::size_t k = c.fixed.size(); k < not_variant; ++k) {
-          with += (with.empty() ? "" : ", ") + r.overrides[k].set_text() + " (" + r.overrides[k].where + ")";
-        }
-        for (const std::string& e : load_errors) {
-          std::string m = c.scenarios[r.scenario].name + ": " + blame(e, r.overrides);
-          if (m == c.scenarios[r.scenario].name + ": " + e && !with.empty()) m += " [in the run with " + with + "]";
-          if (problem_set.insert(m).second) problems.push_back(m);
-        }
-      }
+  for (std::vector<std::string>& list : found) {
+    for (std::string& m : list) {
+      if (problem_set.insert(m).second) problems.push_back(std::move(m));
     }
-    PlannedRun p{i, r.scenario, std::move(r.overrides), ""};
-    p.id = hil::run_id(sc.inputs, p.overrides);
-    if (const auto [it, fresh] = ids.emplace(p.id, i); !fresh) {
-      const std::string m = "runs " + std::to_string(it->second) + " and " + std::to_string(i) +
+  }
+  // two runs with one id: the first one's index for each id, in a map of 16-byte keys
+  std::unordered_map<std::string_view, std::uint64_t> ids;
+  ids.reserve(static_cast<std::size_t>(n));
+  for (const PlannedRun& p : plan.runs) {
+    if (const auto [it, fresh] = ids.emplace(p.id, p.index); !fresh) {
+      const std::string m = "runs " + std::to_string(it->second) + " and " + std::to_string(p.index) +
                             " are the same run (the same files and values; two scenarios with identical files?)";
       if (problem_set.insert(m).second) problems.push_back(m);
     }
-    plan.runs.push_back(std::move(p));
-    if (progress && now_s() - shown > 0.5) {
-      shown = now_s();
-      err << "\rplanning: " << i + 1 << "/" << n << " runs loaded" << std::flush;
-    }
   }
-  if (progress && shown != t0) err << "\r\033[K";
   if (!problems.empty()) {
     constexpr std::size_t kShown = 40;
     for (std::size_t i = 0; i < std::min(kShown, problems.size()); ++i) err << problems[i] << "\n";
@@ -125,16 +171,12 @@ int plan_sweep(const std::string& path, SweepPlan& plan, bool progress, std::ost
   return 0;
 }
 
-PlannedRun plan_run(const Campaign& campaign, std::uint64_t index) {
-  CampaignRun r = campaign_run(campaign, index);
-  std::vector<std::string> sets;
-  for (const CampaignOverride& o : r.overrides) sets.push_back(o.set_text());
-  Scenario sc;
-  std::vector<std::string> load_errors;
-  (void)load_scenario(campaign.scenarios[r.scenario].path, sets, sc, load_errors);
-  PlannedRun p{index, r.scenario, std::move(r.overrides), ""};
-  p.id = run_id(sc.inputs, p.overrides);
-  return p;
+PlannedRun plan_run(const Campaign& campaign, std::uint64_t index, LoadCache& cache) {
+  return plan_one(campaign, index, cache, nullptr);
+}
+
+std::vector<CampaignOverride> overrides_of(const Campaign& campaign, const PlannedRun& run) {
+  return campaign_run(campaign, run.index).overrides;
 }
 
 }  // namespace ehpt::hil

@@ -13,10 +13,11 @@
 
 namespace ehpt::hil {
 
+// A run of the plan: its overrides are campaign_run(campaign, index)'s (overrides_of), not
+// kept, so that a plan of 10^5 runs is a few MB.
 struct PlannedRun {
   std::uint64_t index = 0;  // campaign_run's index
   std::size_t scenario = 0;
-  std::vector<CampaignOverride> overrides;
   std::string id;  // run_id: 64 hex digits
 };
 
@@ -31,12 +32,17 @@ struct SweepPlan {
 // --set labels; at most 40 of the runs' problems), then "the campaign is not valid; nothing was
 // run", and 2 is returned. A variant whose value the scenario refuses is a run that will fail
 // alone (not a problem here). Two runs with the same id are a problem. progress: a "planning:
-// i/n" line on err while it takes long. 0 when the plan is complete.
+// i/n" line on err while it takes long. 0 when the plan is complete. Runs on every CPU this
+// process may use (a worker per block of runs).
 int plan_sweep(const std::string& path, SweepPlan& plan, bool progress, std::ostream& err);
 
 // The run at index of the campaign as planned by plan_sweep (its scenario loaded for its id;
-// a scenario that does not load gives the id of the files it read so far).
-PlannedRun plan_run(const Campaign& campaign, std::uint64_t index);
+// a scenario that does not load gives the id of the files it read so far). cache: shared by
+// the calls of one pass (an array task's queue).
+PlannedRun plan_run(const Campaign& campaign, std::uint64_t index, LoadCache& cache);
+
+// The run's overrides, in --set order ([set] and [output], the grid's, the variant's).
+std::vector<CampaignOverride> overrides_of(const Campaign& campaign, const PlannedRun& run);
 
 // A loader message names an override as "--set key=value": says where the campaign wrote it
 // ("file:line (key=value)"), whole labels only ("--set a=1" is not "--set a=10").

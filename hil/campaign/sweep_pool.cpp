@@ -62,7 +62,7 @@ PoolCounts run_pool(const SweepPlan& plan, const std::vector<std::size_t>& todo,
       const PlannedRun& run = plan.runs[todo[next++]];
       std::vector<std::string> argv{exe, "run", plan.campaign.scenarios[run.scenario].path, "--out", f.run_dir(run.id),
                                     "--quiet"};
-      for (const CampaignOverride& o : run.overrides) {
+      for (const CampaignOverride& o : overrides_of(plan.campaign, run)) {
         argv.push_back("--set");
         argv.push_back(o.set_text());
       }
@@ -112,7 +112,7 @@ PoolCounts run_pool(const SweepPlan& plan, const std::vector<std::size_t>& todo,
       continue;
     }
     std::string error;
-    const std::string record = "exit " + std::to_string(code) + "\n" + (code == 0 ? "" : failure_message(f, run, code) + "\n");
+    const std::string record = "exit " + std::to_string(code) + "\n" + (code == 0 ? "" : failure_message(f, run.id, overrides_of(plan.campaign, run), code) + "\n");
     if (!io::write_file_atomically(f.status_file(run.id), record, error)) err << "error: " << error << "\n";
     (code == 0 ? counts.ok : counts.failed) += 1;
   }

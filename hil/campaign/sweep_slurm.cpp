@@ -294,6 +294,7 @@ int run_shard(const ShardOptions& a, const std::atomic<int>& stop, std::ostream&
   const std::size_t begin = std::min(n, static_cast<std::size_t>(a.shard_index) * per), end = std::min(n, begin + per);
   const std::uint64_t total = hil::campaign_run_count(plan.campaign);
   std::vector<std::size_t> todo;
+  LoadCache cache;  // the queue's runs read the same files
   for (std::size_t e = begin; e < end; ++e) {
     // plain names, not a structured binding: clang 14 cannot capture one in a lambda
     const std::uint64_t index = entries[e].first;
@@ -308,7 +309,7 @@ int run_shard(const ShardOptions& a, const std::atomic<int>& stop, std::ostream&
       changed();
       continue;
     }
-    PlannedRun p = plan_run(plan.campaign, index);
+    PlannedRun p = plan_run(plan.campaign, index, cache);
     if (p.id != id) {
       changed();
       continue;

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <filesystem>
 
 #include "hil/config/config_reader.hpp"
@@ -118,7 +119,8 @@ FileRef choose_vehicle(const std::vector<Layer>& layers, Reader& sc, const std::
 // Reads the vehicle file named by ref and every file it extends (extends = "NAME" or "PATH"),
 // the file first, its base last. A cycle is an error that names the files; a file may not
 // change the base's kind.
-bool load_vehicle_chain(FileRef ref, std::vector<toml::table>& docs, Context& ctx) {
+bool load_vehicle_chain(FileRef ref, std::deque<toml::table>& storage, std::vector<const toml::table*>& docs,
+                        Context& ctx) {
   std::vector<std::string> chain;  // canonical paths, for the cycle check
   std::vector<std::string> shown;  // as read, for messages
   docs.clear();
@@ -138,12 +140,12 @@ bool load_vehicle_chain(FileRef ref, std::vector<toml::table>& docs, Context& ct
                            std::to_string(kMaxExtends) + " vehicle files extend each other");
       return false;
     }
-    toml::table doc;
-    if (!parse_toml(ref.path, doc, ctx, &ref)) return false;
+    const toml::table* doc = read_toml(ref.path, storage.emplace_back(), ctx, &ref);
+    if (doc == nullptr) return false;
     chain.push_back(id);
     shown.push_back(ref.path);
-    docs.push_back(std::move(doc));
-    const toml::node* ext = docs.back().get("extends");
+    docs.push_back(doc);
+    const toml::node* ext = doc->get("extends");
     if (ext == nullptr) break;
     FileRef next = vehicle_file_of(*ext, ref.path, "extends", false, ctx);
     if (next.empty()) return false;
@@ -152,7 +154,7 @@ bool load_vehicle_chain(FileRef ref, std::vector<toml::table>& docs, Context& ct
   // the kind comes from the base; a file over it may repeat it, not change it
   std::string base_kind, base_file;
   for (std::size_t i = docs.size(); i-- > 0;) {
-    const toml::node* k = docs[i].get("kind");
+    const toml::node* k = docs[i]->get("kind");
     if (k == nullptr || !k->is_string()) continue;
     const std::string kind = *k->value_exact<std::string>();
     if (base_kind.empty()) {
@@ -169,8 +171,9 @@ bool load_vehicle_chain(FileRef ref, std::vector<toml::table>& docs, Context& ct
 
 // load_scenario's work; cycle: the cycle as arrays in place of the scenario's file (nullptr: the file)
 bool load(const std::string& path, const std::vector<std::string>& overrides, const std::vector<std::string>& fault_args,
-          const CycleArrays* cycle, Scenario& out, std::vector<std::string>& errors) {
+          const CycleArrays* cycle, Scenario& out, std::vector<std::string>& errors, LoadCache* cache = nullptr) {
   Context ctx;
+  if (cache != nullptr) ctx.cache = &cache->files();
   out = Scenario{};
   out.path = path;
   out.name = fs::path(path).stem().string();
@@ -179,15 +182,17 @@ bool load(const std::string& path, const std::vector<std::string>& overrides, co
   // layers: each --set, the last given first (the last --set of a key wins), then the file
   std::vector<toml::table> set_docs(overrides.size());
   for (std::size_t i = 0; i < overrides.size(); ++i) parse_override(overrides[i], set_docs[i], ctx);
-  toml::table scenario_doc;
-  if (!parse_toml(path, scenario_doc, ctx)) {
+  toml::table scenario_storage, base_storage;
+  const toml::table* const scenario_read = read_toml(path, scenario_storage, ctx);
+  if (scenario_read == nullptr) {
     errors = ctx.errors;
     out.inputs = std::move(ctx.inputs);
     return false;
   }
+  const toml::table& scenario_doc = *scenario_read;
   // a test file names the scenario it runs (scenario = "NAME" or a path): that file is read
   // under it, so the test's keys override the scenario's and its tables add to them
-  toml::table base_doc;
+  const toml::table* base_read = nullptr;
   bool has_base = false;
   if (const toml::node* n = scenario_doc.get("scenario")) {
     const auto v = n->value_exact<std::string>();
@@ -202,8 +207,8 @@ bool load(const std::string& path, const std::vector<std::string>& overrides, co
     }
     if (base.empty()) {
       ctx.errors.push_back(location(n, path) + ": scenario = " + node_text(*n) + ": " + reason);
-    } else if (parse_toml(base, base_doc, ctx)) {
-      if (const toml::node* again = base_doc.get("scenario")) {
+    } else if ((base_read = read_toml(base, base_storage, ctx)) != nullptr) {
+      if (const toml::node* again = base_read->get("scenario")) {
         ctx.errors.push_back(location(again, base) + ": scenario: " + path + " runs " + base +
                              ", which names another scenario itself; a test names the scenario it runs, one level only");
       } else {
@@ -220,7 +225,7 @@ bool load(const std::string& path, const std::vector<std::string>& overrides, co
   std::vector<Layer> layers;
   for (auto d = set_docs.rbegin(); d != set_docs.rend(); ++d) layers.push_back({&*d, false});
   layers.push_back({&scenario_doc, false});
-  if (has_base) layers.push_back({&base_doc, false});
+  if (has_base) layers.push_back({base_read, false});
   Reader sc(layers, "", path, ctx);
   sc.known("scenario");
 
@@ -290,8 +295,9 @@ bool load(const std::string& path, const std::vector<std::string>& overrides, co
   // the vehicle: --set vehicle.*, then the scenario's [vehicle] table, then the vehicle file and
   // the files it extends, the base last
   sc.finish();
-  std::vector<toml::table> vehicle_docs;
-  if (vehicle_ref.empty() || !load_vehicle_chain(vehicle_ref, vehicle_docs, ctx)) {
+  std::deque<toml::table> vehicle_storage;
+  std::vector<const toml::table*> vehicle_docs;
+  if (vehicle_ref.empty() || !load_vehicle_chain(vehicle_ref, vehicle_storage, vehicle_docs, ctx)) {
     ctx.suggest_known_keys();
     errors = ctx.errors;
     out.inputs = std::move(ctx.inputs);
@@ -300,8 +306,8 @@ bool load(const std::string& path, const std::vector<std::string>& overrides, co
   std::vector<Layer> vlayers;
   for (auto d = set_docs.rbegin(); d != set_docs.rend(); ++d) vlayers.push_back({d->get_as<toml::table>("vehicle"), false});
   vlayers.push_back({scenario_doc.get_as<toml::table>("vehicle"), false});
-  if (has_base) vlayers.push_back({base_doc.get_as<toml::table>("vehicle"), false});
-  for (const toml::table& doc : vehicle_docs) vlayers.push_back({&doc, true});
+  if (has_base) vlayers.push_back({base_read->get_as<toml::table>("vehicle"), false});
+  for (const toml::table* doc : vehicle_docs) vlayers.push_back({doc, true});
   for (std::size_t i = 0; i + vehicle_docs.size() < vlayers.size(); ++i) {
     // only a vehicle file extends another: in a scenario the vehicle is named by vehicle = "..."
     if (const toml::node* n = vlayers[i].table == nullptr ? nullptr : vlayers[i].table->get("extends")) {
@@ -424,6 +430,14 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
 bool load_scenario(const std::string& path, const std::vector<std::string>& overrides,
                    const std::vector<std::string>& faults, Scenario& out, std::vector<std::string>& errors) {
   return load(path, overrides, faults, nullptr, out, errors);
+}
+
+LoadCache::LoadCache() : files_(std::make_unique<Files>()) {}
+LoadCache::~LoadCache() = default;
+
+bool load_scenario(const std::string& path, const std::vector<std::string>& overrides, Scenario& out,
+                   std::vector<std::string>& errors, LoadCache& cache) {
+  return load(path, overrides, {}, nullptr, out, errors, &cache);
 }
 
 bool load_scenario_with_cycle(const std::string& path, const std::vector<std::string>& overrides,

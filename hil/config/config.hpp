@@ -8,6 +8,7 @@
 // and reported as "file:line: field = value: expectation" before anything runs.
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -101,6 +102,25 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
                    std::vector<std::string>& errors);
 bool load_scenario(const std::string& path, const std::vector<std::string>& overrides,
                    const std::vector<std::string>& faults, Scenario& out, std::vector<std::string>& errors);
+
+// The files a series of loads shares (a sweep's plan loads every run's scenario: the same
+// vehicle, maps and cycle each time), each read, hashed and parsed once: a load through it
+// gives what load_scenario gives while the files do not change. For loads close together in
+// time (one plan), not for a long-lived process: a file changed meanwhile is not read again.
+class LoadCache {
+ public:
+  LoadCache();
+  ~LoadCache();
+  LoadCache(const LoadCache&) = delete;
+  LoadCache& operator=(const LoadCache&) = delete;
+  struct Files;
+  Files& files() { return *files_; }
+
+ private:
+  std::unique_ptr<Files> files_;
+};
+bool load_scenario(const std::string& path, const std::vector<std::string>& overrides, Scenario& out,
+                   std::vector<std::string>& errors, LoadCache& cache);
 
 // A drive cycle given as numbers instead of a CSV file (the Python module's cycle=(t_s, v_m_s)):
 // time in s, speed in m/s. It takes the place of the scenario's `cycle` file (cycle_periodic

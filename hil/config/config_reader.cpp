@@ -113,39 +113,77 @@ void Context::suggest_known_keys() {
 
 // ref: the key that names the file (the vehicle file), so that a missing file is reported
 // there; nullptr for the scenario itself.
-void Context::read_file(const std::string& path, const std::string& content) {
+void Context::read_file(const std::string& path, const std::string& content, const std::string* sha256) {
   for (const InputFile& f : inputs) {
     if (f.path == path) return;
   }
-  inputs.push_back(InputFile{path, io::sha256_hex(content), content.size()});
+  inputs.push_back(InputFile{path, sha256 != nullptr ? *sha256 : io::sha256_hex(content), content.size()});
 }
 
-bool parse_toml(const std::string& path, toml::table& out, Context& ctx, const FileRef* ref) {
-  std::string content, reason;
-  if (!io::read_text_file(path, content, reason)) {
+const std::string* Context::read(const std::string& path, std::string& storage, std::string& why) {
+  if (cache == nullptr) {
+    if (!io::read_text_file(path, storage, why)) return nullptr;
+    read_file(path, storage);
+    return &storage;
+  }
+  auto [it, fresh] = cache->bytes.try_emplace(path);
+  LoadCache::Files::File& f = it->second;
+  if (fresh) {
+    f.ok = io::read_text_file(path, f.content, f.reason);
+    if (f.ok) f.sha256 = io::sha256_hex(f.content);
+  }
+  if (!f.ok) {
+    why = f.reason;
+    return nullptr;
+  }
+  read_file(path, f.content, &f.sha256);
+  return &f.content;
+}
+
+const toml::table* read_toml(const std::string& path, toml::table& storage, Context& ctx, const FileRef* ref) {
+  if (ctx.cache != nullptr) {
+    if (const auto it = ctx.cache->toml.find(path); it != ctx.cache->toml.end()) {
+      std::string bytes, reason;
+      (void)ctx.read(path, bytes, reason);  // listed as an input, as when parsed
+      return &it->second;
+    }
+  }
+  std::string bytes, reason;
+  const std::string* read = ctx.read(path, bytes, reason);
+  if (read == nullptr) {
     if (ref != nullptr) {
       ctx.unreadable(*ref, reason);
     } else {
       ctx.errors.push_back(path + ": cannot read: " + reason);
     }
-    return false;
+    return nullptr;
   }
-  ctx.read_file(path, content);
+  const std::string& content = *read;
   if (const int line = line_with_too_many_dots(content); line != 0) {
     ctx.errors.push_back(path + ":" + std::to_string(line) + ": more than " + std::to_string(kMaxDotsPerLine) +
                          " dots on one line (a dotted key that long would overflow the TOML parser; write a long "
                          "array of numbers over several lines)");
-    return false;
+    return nullptr;
   }
   try {
-    out = toml::parse(content, path);
-    return true;
+    // a table is never copied: a copy of a toml++ node loses its source (file:line in messages)
+    if (ctx.cache != nullptr) return &ctx.cache->toml.emplace(path, toml::parse(content, path)).first->second;
+    storage = toml::parse(content, path);
+    return &storage;
   } catch (const toml::parse_error& e) {
     const auto& src = e.source();
     ctx.errors.push_back(path + ":" + std::to_string(src.begin.line) + ": TOML syntax: " +
                          std::string(e.description()));
   }
-  return false;
+  return nullptr;
+}
+
+bool parse_toml(const std::string& path, toml::table& out, Context& ctx, const FileRef* ref) {
+  LoadCache::Files* const cache = ctx.cache;
+  ctx.cache = nullptr;  // out is the caller's own
+  const bool ok = read_toml(path, out, ctx, ref) != nullptr;
+  ctx.cache = cache;
+  return ok;
 }
 
 // "a.b.c=value": the value is parsed as TOML (number, bool, quoted string, array), or taken as text.
@@ -189,15 +227,20 @@ namespace {
 
 // Reads the CSV named by ref. A file that cannot be read is reported at the key that names
 // it; its follow-on problems (no table) are not.
-bool read_table(const FileRef& ref, const std::string& field, io::CsvTable& t, Context& ctx) {
+const io::CsvTable* read_table(const FileRef& ref, const std::string& field, io::CsvTable& storage, Context& ctx) {
   ctx.failed_tables.insert(field);
-  std::string content, reason;
-  if (!io::read_text_file(ref.path, content, reason)) {
+  std::string bytes, reason;
+  const std::string* content = ctx.read(ref.path, bytes, reason);
+  if (content == nullptr) {
     ctx.unreadable(ref, reason);
-    return false;
+    return nullptr;
   }
-  ctx.read_file(ref.path, content);
-  return io::parse_csv_table(ref.path, content, t, ctx.errors);
+  if (ctx.cache != nullptr) {
+    if (const auto it = ctx.cache->csv.find(ref.path); it != ctx.cache->csv.end()) return &it->second;
+  }
+  if (!io::parse_csv_table(ref.path, *content, storage, ctx.errors)) return nullptr;
+  if (ctx.cache != nullptr) return &ctx.cache->csv.emplace(ref.path, std::move(storage)).first->second;
+  return &storage;
 }
 
 // Remembers the CSV behind a table; csv_columns[k] is the CSV column of table column k.
@@ -241,8 +284,10 @@ plant::Table1d cycle_of_arrays(const CycleArrays& a, const std::string& field, b
 // last speed is held, or the cycle repeats (periodic).
 plant::Table1d load_cycle(const FileRef& ref, const std::string& field, bool periodic, Context& ctx) {
   if (ctx.cycle_arrays != nullptr) return cycle_of_arrays(*ctx.cycle_arrays, field, periodic, ctx);
-  io::CsvTable t;
-  if (!read_table(ref, field, t, ctx)) return {};
+  io::CsvTable storage;
+  const io::CsvTable* table = read_table(ref, field, storage, ctx);
+  if (table == nullptr) return {};
+  const io::CsvTable& t = *table;
   const int ti = t.column_index("time_s");
   int vi = t.column_index("speed_m_s");
   double scale = 1.0;
@@ -265,8 +310,10 @@ plant::Table1d load_cycle(const FileRef& ref, const std::string& field, bool per
 }
 
 plant::Table1d load_curve(const FileRef& ref, const std::string& field, Context& ctx) {
-  io::CsvTable t;
-  if (!read_table(ref, field, t, ctx)) return {};
+  io::CsvTable storage;
+  const io::CsvTable* table = read_table(ref, field, storage, ctx);
+  if (table == nullptr) return {};
+  const io::CsvTable& t = *table;
   if (t.header.size() < 2) {
     ctx.errors.push_back(t.path + ":" + std::to_string(t.header_line) + ": header: expected two columns (x, y)");
     return {};
@@ -277,8 +324,10 @@ plant::Table1d load_curve(const FileRef& ref, const std::string& field, Context&
 
 // Tidy 2-D map "u1, u2, value" sorted by u1 then u2 (data/README.md) -> grid.
 plant::Table2d load_map(const FileRef& ref, const std::string& field, Context& ctx) {
-  io::CsvTable t;
-  if (!read_table(ref, field, t, ctx)) return {};
+  io::CsvTable storage;
+  const io::CsvTable* table = read_table(ref, field, storage, ctx);
+  if (table == nullptr) return {};
+  const io::CsvTable& t = *table;
   const std::string& path = t.path;
   if (t.header.size() != 3) {
     ctx.errors.push_back(path + ":" + std::to_string(t.header_line) +

@@ -47,6 +47,24 @@ struct FileRef {
   bool empty() const { return path.empty(); }
 };
 
+}  // namespace ehpt::hil::detail
+
+namespace ehpt::hil {
+// What a LoadCache holds: each file's bytes (or why it cannot be read) with its SHA-256, and
+// the TOML and CSV files parsed (a parse that failed is not kept: it is reported again).
+struct LoadCache::Files {
+  struct File {
+    bool ok = false;
+    std::string content, reason, sha256;
+  };
+  std::map<std::string, File> bytes;
+  std::map<std::string, toml::table> toml;
+  std::map<std::string, io::CsvTable> csv;
+};
+}  // namespace ehpt::hil
+
+namespace ehpt::hil::detail {
+
 // Collects messages and remembers where each field's value came from, so that problems
 // found later by plant/ validate() can be given a file and line.
 struct Context {
@@ -77,7 +95,12 @@ struct Context {
   const CycleArrays* cycle_arrays = nullptr;  // load_scenario_with_cycle: load_cycle takes these, not a file
   // every file read, in the order read (each once): what the run depends on (hil/config/config.hpp)
   std::vector<InputFile> inputs;
-  void read_file(const std::string& path, const std::string& content);
+  void read_file(const std::string& path, const std::string& content, const std::string* sha256 = nullptr);
+  // the loads' shared files, or none (every file read from disk)
+  LoadCache::Files* cache = nullptr;
+  // The file's bytes (from the cache, else read into storage); nullptr and reason if it cannot
+  // be read. Either way it is listed in inputs when read.
+  const std::string* read(const std::string& path, std::string& storage, std::string& reason);
 
   void error(const std::string& loc, const std::string& field, const std::string& value,
              const std::string& expected) {
@@ -128,24 +151,26 @@ class Reader {
     return (in_file ? "" : space_) + field(key);
   }
   // A key this reader knows but reads elsewhere (or not at all): not unknown.
-  void known(std::string_view key) {
-    used_.insert(std::string(key));
-    ctx_.known.insert(space_ + field(key));
-  }
+  void known(std::string_view key) { known_field(key, field(key)); }
 
+  // (every key of every load passes here: a sweep's plan loads each run's scenario, so the
+  // field name is built once and each map is written with one lookup)
   const toml::node* find(std::string_view key) {
-    known(key);
+    std::string f = field(key);
+    known_field(key, f);
+    const toml::node* found = nullptr;
+    int layer = -1;
     for (std::size_t i = 0; i < layers_.size(); ++i) {
       if (layers_[i].table == nullptr) continue;
-      if (const toml::node* n = layers_[i].table->get(key)) {
-        ctx_.where[field(key)] = location(n, file_);
-        ctx_.shown[field(key)] = written(key, static_cast<int>(i));
-        return n;
+      if ((found = layers_[i].table->get(key)) != nullptr) {
+        layer = static_cast<int>(i);
+        break;
       }
     }
-    ctx_.where[field(key)] = file_ + " (default)";
-    ctx_.shown[field(key)] = written(key, -1);
-    return nullptr;
+    const bool in_file = layer < 0 ? where_in_vehicle_file_ : layers_[static_cast<std::size_t>(layer)].vehicle_file;
+    ctx_.shown.insert_or_assign(f, in_file ? f : space_ + f);
+    ctx_.where.insert_or_assign(std::move(f), found != nullptr ? location(found, file_) : file_ + " (default)");
+    return found;
   }
   bool has(std::string_view key) const { return layer_of(key) >= 0; }
   // The layer that gives key (0 is the highest: the last --set), -1 if none does.
@@ -334,13 +359,24 @@ class Reader {
   std::string where_;
   std::string space_;
   bool where_in_vehicle_file_ = false;
-  std::set<std::string> used_;
+  std::set<std::string, std::less<>> used_;
+  void known_field(std::string_view key, const std::string& f) {
+    if (used_.find(key) == used_.end()) used_.emplace(key);
+    if (space_.empty()) {
+      if (ctx_.known.find(f) == ctx_.known.end()) ctx_.known.insert(f);
+    } else {
+      ctx_.known.insert(space_ + f);
+    }
+  }
 };
 
 // Parses a TOML file (a regular file of at most 64 MiB, no over-long dotted keys). ref: the
 // key that names the file, so that a missing file is reported there; nullptr for the
 // scenario itself.
 bool parse_toml(const std::string& path, toml::table& out, Context& ctx, const FileRef* ref = nullptr);
+// The same into the context's cache when it has one (the table there, parsed once), else into
+// storage; nullptr when it cannot be read or parsed (the problem in ctx).
+const toml::table* read_toml(const std::string& path, toml::table& storage, Context& ctx, const FileRef* ref = nullptr);
 // "a.b.c=value" as given to --set: the value as TOML (number, bool, quoted string, array), or text.
 bool parse_override(const std::string& text, toml::table& out, Context& ctx);
 

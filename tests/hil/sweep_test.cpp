@@ -57,8 +57,9 @@ TEST_F(SweepFiles, ThePlanHasOneStableIdPerRun) {
     const PlannedRun& r = plan.runs[i];
     EXPECT_EQ(r.index, i);
     EXPECT_TRUE(is_run_id(r.id)) << r.id;
-    EXPECT_EQ(r.overrides.back().set_text(), "vehicle.battery.soc_initial=" + std::string(i == 0 ? "0.5" : i == 1 ? "0.55" : i == 2 ? "0.6" : i == 3 ? "0.65" : "0.7"));
-    EXPECT_EQ(plan_run(plan.campaign, i).id, r.id);  // what an array task checks its queue against
+    EXPECT_EQ(overrides_of(plan.campaign, r).back().set_text(), "vehicle.battery.soc_initial=" + std::string(i == 0 ? "0.5" : i == 1 ? "0.55" : i == 2 ? "0.6" : i == 3 ? "0.65" : "0.7"));
+    LoadCache cache;
+    EXPECT_EQ(plan_run(plan.campaign, i, cache).id, r.id);  // what an array task checks its queue against
     for (std::size_t k = 0; k < i; ++k) EXPECT_NE(plan.runs[k].id, r.id);
   }
   SweepPlan again;
