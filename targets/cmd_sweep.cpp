@@ -4,8 +4,11 @@
 
 #include "targets/cmd_sweep.hpp"
 
+#include <sys/resource.h>
 #include <unistd.h>
 
+#include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <iostream>
 
@@ -26,6 +29,7 @@ const char* const kSweepHelp =
     "       ehpt sweep CAMPAIGN --out DIR --executor slurm [--partition P] [--max-parallel M]\n"
     "                  [--shard-size K] [--no-wait] [--retry-failed] [--quiet]\n"
     "       ehpt sweep --status DIR\n"
+    "       ehpt sweep CAMPAIGN --plan\n"
     "\n"
     "Runs every run of a campaign (campaigns/*.toml: scenarios x [grid] x variants; the format\n"
     "is in docs/campaigns.md) as 'ehpt run' and merges the\n"
@@ -44,6 +48,9 @@ const char* const kSweepHelp =
     "  --max-parallel M   at most M array tasks at once (sbatch --array=...%M)\n"
     "  --shard-size K     runs per array task (default 16)\n"
     "  --no-wait          submit and return; 'ehpt sweep --status DIR' later\n"
+    "  --plan             check the campaign and every run's scenario (on every CPU this\n"
+    "                     process may use), print the count, the time and peak memory it\n"
+    "                     took; nothing is run or written (exit 0, or 2 with the problems)\n"
     "  --status DIR       runs done, failed and pending, the Slurm job's state; merges the\n"
     "                     results so far (exit 5 while the job is queued or running)\n"
     "  --shard I/N        (run by each array task) run the I-th of N parts of DIR's queue\n"
@@ -60,7 +67,7 @@ namespace {
 struct Args {
   std::string campaign, out_dir, status_dir;
   int jobs = 0;
-  bool retry_failed = false, quiet = false, no_wait = false;
+  bool retry_failed = false, quiet = false, no_wait = false, plan_only = false;
   std::string executor = "local", partition;
   int max_parallel = 0;
   std::int64_t shard_size = hil::kDefaultShardSize;
@@ -116,6 +123,8 @@ int parse_args(const std::vector<std::string>& args, Args& a) {
       a.no_wait = true;
     } else if (o == "--quiet") {
       a.quiet = true;
+    } else if (o == "--plan") {
+      a.plan_only = true;
     } else if (!o.empty() && o[0] == '-') {
       return fail("unknown option " + o);
     } else if (a.campaign.empty()) {
@@ -129,6 +138,12 @@ int parse_args(const std::vector<std::string>& args, Args& a) {
     return 0;
   }
   if (a.campaign.empty()) return fail("which campaign? (a campaigns/*.toml file)");
+  if (a.plan_only) {
+    if (!a.out_dir.empty() || a.executor != "local" || a.retry_failed || a.jobs != 0) {
+      return fail("--plan checks the campaign and runs nothing: it takes no --out, -j, --executor or --retry-failed");
+    }
+    return 0;
+  }
   if (a.out_dir.empty()) return fail("--out DIR is required (the sweep folder)");
   if (a.executor == "local" && (!a.partition.empty() || a.max_parallel != 0 || a.no_wait)) {
     return fail("--partition, --max-parallel and --no-wait are for --executor slurm");
@@ -194,7 +209,20 @@ int cmd_sweep(const std::vector<std::string>& args, const std::atomic<int>& stop
     if (const int rc = hil::check_slurm(a.partition, sbatch, std::cerr); rc != 0) return rc;
   }
   hil::SweepPlan plan;
+  const auto t0 = std::chrono::steady_clock::now();
   if (const int rc = hil::plan_sweep(a.campaign, plan, !a.quiet && isatty(STDERR_FILENO), std::cerr); rc != 0) return rc;
+  if (a.plan_only) {
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    rusage ru{};
+    (void)getrusage(RUSAGE_SELF, &ru);  // ru_maxrss: KiB on Linux
+    char figures[160];
+    std::snprintf(figures, sizeof figures, "planned in %.2f s on %d CPUs, peak memory %.1f MB", s, hil::usable_cpus(),
+                  static_cast<double>(ru.ru_maxrss) * 1024.0 / 1e6);
+    // one line, also with --quiet: what --plan is asked for (ehpt bench reads it)
+    std::cout << "campaign      " << plan.campaign.path << ": " << plan.runs.size() << " runs, every one valid; "
+              << figures << "; nothing was run\n" << std::flush;
+    return std::cout ? 0 : 1;
+  }
   const hil::SweepFolder f{hil::absolute_folder(a.out_dir)};
   std::string error;
   // the lock lives beside DIR ("DIR.ehpt-lock"): DIR must have a name and a parent folder

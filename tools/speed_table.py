@@ -8,7 +8,8 @@ Reads BENCH_JSON (written by `ehpt bench`), builds a Markdown table of every spe
 holds (ns per step, real-time factors, implicit Euler / RK4, wake-up latency next to
 cyclictest's, overruns, peak RSS of the real-time run, the lockstep exchange's rate and round
 trip with ehpt ecu and a python-can ECU, the python-can ECU's command frames on the wall
-clock, the own-DBC VCU's stale samples on the wall clock and in real time, RK4 and CVODE wall times) with the
+clock, the own-DBC VCU's stale samples on the wall clock and in real time, RK4 and CVODE wall times,
+sweep planning's time and memory) with the
 commit, date, machine and load average the bench recorded, and writes it into PAGE between
 the lines `<!-- speed-table:begin -->` and `<!-- speed-table:end -->` (everything else in
 PAGE is kept as it is). Every row names the bench.json value it shows, so a reader (and the
@@ -137,6 +138,15 @@ def rows_of(bench):
         target = cv.get("target_wall_ratio")
         add(f"`{scenario}`: CVODE / RK4 wall time", base + ".wall_ratio", 1,
             f">= {target:g}" if isinstance(target, (int, float)) else "")
+
+    plan = bench.get("sweep_plan", {})
+    if plan.get("status") == "ok":
+        runs, target_runs = plan.get("runs"), plan.get("target_runs")
+        full = runs == target_runs  # the targets are for target_runs runs
+        add(f"`ehpt sweep --plan`, {runs} psecu2_nedc runs on {number(plan.get('cpus', 0), 0)} CPUs: wall s",
+            "sweep_plan.wall_s", 2, f"<= {number(plan.get('target_wall_s', 0), 0)}" if full else "")
+        add(f"`ehpt sweep --plan`, {runs} runs: peak memory, MB", "sweep_plan.peak_rss_MB", 1,
+            f"<= {number(plan.get('target_peak_rss_MB', 0), 0)}" if full else "")
     return rows
 
 

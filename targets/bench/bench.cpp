@@ -56,8 +56,10 @@ const char* const ehpt::cli::kBenchHelp =
     "      stale samples and timeouts (python3-can, python3-canmatrix; said so when missing)\n"
     "  (f) RK4 at 1 ms against the CVODE reference (BDF, rtol 1e-8): final SOC, fuel and\n"
     "      distance differences, wall-time ratio\n"
+    "  (g) planning a sweep of 100000 psecu2_nedc runs ('ehpt sweep CAMPAIGN --plan'): wall\n"
+    "      time and peak memory\n"
     "  --quick          a short version (under a minute): one repetition, 5 s of real time,\n"
-    "                   the first 400 s of the cycles in (f)\n"
+    "                   the first 400 s of the cycles in (f), 10000 runs in (g)\n"
     "  --out DIR        output folder (default bench-out): made fresh, or empty, or an\n"
     "                   earlier bench; anything else is refused\n"
     "  --cpu N          the CPU of (c) (default: the last one this process may use)\n"
@@ -216,7 +218,8 @@ int ehpt::cli::cmd_bench(const std::vector<std::string>& args) {
              ", load " + b.load_start);
   std::string text;
   // each section in turn; bench.json after each, so that a hard stop leaves what was done
-  const std::vector<void (*)(Bench&)> sections = {section_speed, section_cvode, section_latency, section_runs};
+  const std::vector<void (*)(Bench&)> sections = {section_speed, section_cvode, section_latency, section_runs,
+                                                         section_plan};
   for (const auto section : sections) {
     if (stopping()) break;
     section(b);

@@ -278,6 +278,16 @@ std::string report_text(const Bench& b) {
               "target", ""},
              rows, "lrrrrrrrrrrl");
   if (b.cvode_status != "ok") s += "  " + b.cvode_status + "\n";
+
+  // (g)
+  s += "\n(g) sweep planning ('ehpt sweep CAMPAIGN --plan', psecu2_nedc runs)\n";
+  if (b.plan_status == "ok") {
+    s += "  " + std::to_string(b.plan_runs) + " runs planned in " + fmt("%.2f", b.plan_wall_s) + " s on " +
+         fmt("%.0f", b.plan_cpus) + " CPUs, peak memory " + fmt("%.1f", b.plan_rss_MB) +
+         " MB (target for 100000 runs: <= 10 s, <= 100 MB)\n";
+  } else {
+    s += "  " + b.plan_status + "\n";
+  }
   std::snprintf(buf, sizeof buf, "\nbench %s in %.1f s; outputs in %s (bench.json, bench.txt, logs/)\n", b.status.c_str(),
                 seconds_since(b.t0), b.opt.out.c_str());
   s += buf;
@@ -483,6 +493,17 @@ std::string report_json(const Bench& b) {
   }
   cv.object("scenarios", rowsj);
   j.object("cvode", cv);
+
+  JsonObject plan;
+  plan.text("status", b.plan_status);
+  plan.integer("runs", b.plan_runs);
+  plan.number("wall_s", b.plan_wall_s);
+  plan.number("cpus", b.plan_cpus);
+  plan.number("peak_rss_MB", b.plan_rss_MB);
+  plan.integer("target_runs", 100000);
+  plan.number("target_wall_s", 10.0);
+  plan.number("target_peak_rss_MB", 100.0);
+  j.object("sweep_plan", plan);
   return j.str() + "\n";
 }
 

@@ -13,6 +13,9 @@ void section_speed(Bench& b);
 void section_cvode(Bench& b);
 // (c) wake-up latency of 'ehpt run --realtime' next to cyclictest's (targets/bench/section_latency.cpp).
 void section_latency(Bench& b);
+// (g) planning a sweep of 10^5 runs (--quick: 10^4) with 'ehpt sweep --plan'
+// (targets/bench/section_plan.cpp).
+void section_plan(Bench& b);
 // (d), (e) the sub-runs: heap allocations after start-up and the trajectory hash across
 // pacers and transports (targets/bench/section_runs.cpp).
 void section_runs(Bench& b);

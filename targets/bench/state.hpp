@@ -84,6 +84,9 @@ struct Bench {
   std::vector<std::string> rt_warnings;
   std::vector<SubRun> runs;
   bool replay_available = false;
+  std::string plan_status = "not run";  // (g)
+  int plan_runs = 0;
+  double plan_wall_s = NAN, plan_rss_MB = NAN, plan_cpus = NAN;
 
   SubRun& run(const std::string& name) {
     for (auto& r : runs) {

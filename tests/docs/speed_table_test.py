@@ -93,6 +93,8 @@ def check(page_text, bench):
         if isinstance(run, dict) and run.get("status") == "ok":
             required += [f"cvode.scenarios.{scenario}.rk4_wall_s.median",
                          f"cvode.scenarios.{scenario}.cvode_wall_s.median"]
+    if at(bench, "sweep_plan.status") == "ok":
+        required += ["sweep_plan.wall_s", "sweep_plan.peak_rss_MB"]
     if len(required) < 10:
         problems.append(f"the bench gave only {len(required)} speed figures: it did not run its sections")
     for path in required:
