@@ -337,6 +337,32 @@ def test_bad_input(ehpt, tmp):
     check(r.returncode == 1 and not os.path.exists(fresh), "-j 0: usage error, exit 1")
 
 
+def test_plan(ehpt, tmp):
+    camp = write_campaign(tmp, "plan.toml")
+    before = tree(tmp)
+    r = sweep(ehpt, camp, "--plan")
+    check(r.returncode == 0 and "16 runs, every one valid; planned in " in r.stdout and "nothing was run" in r.stdout
+          and tree(tmp) == before, "--plan: the count, exit 0, nothing written: %s" % (r.stdout + r.stderr).strip())
+    # planned on several workers (398 runs, the first key outermost): the value refused in the
+    # second half of the runs only (a later worker's block), reported once at the campaign's
+    # line, exit 2, as the sweep itself reports it
+    many = os.path.join(tmp, "many.toml")
+    with open(many, "w") as f:
+        f.write('scenarios = ["ev_nedc"]\n[grid]\n"vehicle.battery.soc_initial" = [0.5, 1.5]\n'
+                '"solver.duration_s" = [%s]\n' % ", ".join(str(d) for d in range(1, 200)))
+    before = tree(tmp)
+    r = sweep(ehpt, many, "--plan")
+    lines = [l for l in r.stderr.splitlines() if "many.toml:3 (vehicle.battery.soc_initial=1.5)" in l]
+    check(r.returncode == 2 and len(lines) == 1 and "nothing was run" in r.stderr and tree(tmp) == before,
+          "--plan over workers: the refused value once, exit 2: %s" % r.stderr.strip()[:300])
+    fresh = os.path.join(tmp, "plan_out")
+    r2 = sweep(ehpt, many, "--out", fresh)
+    check(r2.returncode == 2 and r2.stderr == r.stderr and not os.path.exists(fresh),
+          "... the same problems as the sweep gives, nothing created")
+    r = sweep(ehpt, camp, "--plan", "--out", fresh)
+    check(r.returncode == 1 and "--plan" in r.stderr and not os.path.exists(fresh), "--plan with --out: usage error, exit 1")
+
+
 def test_plot(ehpt, tmp):
     camp = write_campaign(tmp, "plot.toml")
     out = os.path.join(tmp, "plot_out")
@@ -349,7 +375,7 @@ def test_plot(ehpt, tmp):
               "ehpt plot on a sweep folder (%d): %s %s" % (attempt, figures, r.stderr.strip()[-300:]))
 
 
-GROUPS = {"Failures": test_failures, "DamagedRecords": test_damaged_records, "Resume": test_resume, "ChangedInput": test_changed_input,
+GROUPS = {"Plan": test_plan, "Failures": test_failures, "DamagedRecords": test_damaged_records, "Resume": test_resume, "ChangedInput": test_changed_input,
           "BadInput": test_bad_input, "Plot": test_plot}
 
 
