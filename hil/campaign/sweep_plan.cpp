@@ -8,6 +8,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <ostream>
 #include <set>
 #include <sstream>
@@ -117,32 +118,54 @@ int plan_sweep(const std::string& path, SweepPlan& plan, bool progress, std::ost
   plan.runs.assign(static_cast<std::size_t>(n), PlannedRun{});
   const std::size_t workers = static_cast<std::size_t>(std::clamp<std::uint64_t>(n / 64, 1, static_cast<std::uint64_t>(usable_cpus())));
   const std::uint64_t per = (n + workers - 1) / workers;
-  std::vector<std::vector<std::string>> found(workers);  // each worker's problems, in run order
+  // each worker's problems in run order, each once (a value refused in every run is one line)
+  std::vector<std::vector<std::string>> found(workers);
   std::atomic<std::uint64_t> done{0};
+  std::atomic<std::size_t> working{workers};
   const auto work = [&](std::size_t w) {
-    LoadCache cache;
+    std::set<std::string> seen;
+    std::vector<std::string> mine;
     const std::uint64_t begin = std::min<std::uint64_t>(n, w * per), end = std::min<std::uint64_t>(n, begin + per);
-    for (std::uint64_t i = begin; i < end; ++i) {
-      plan.runs[static_cast<std::size_t>(i)] = plan_one(c, i, cache, &found[w]);
-      done.fetch_add(1, std::memory_order_relaxed);
+    try {
+      LoadCache cache;
+      for (std::uint64_t i = begin; i < end; ++i) {
+        mine.clear();
+        plan.runs[static_cast<std::size_t>(i)] = plan_one(c, i, cache, &mine);
+        for (std::string& m : mine) {
+          if (seen.insert(m).second) found[w].push_back(std::move(m));
+        }
+        done.fetch_add(1, std::memory_order_relaxed);
+      }
+    } catch (const std::exception& e) {  // out of memory, say: a problem, never a crash
+      found[w].push_back(std::string("planning runs ") + std::to_string(begin) + ".." + std::to_string(end - 1) +
+                         ": " + e.what());
     }
+    working.fetch_sub(1);
   };
   {
+    // the workers plan; this thread shows the progress until they are done
     std::vector<std::thread> threads;
-    for (std::size_t w = 1; w < workers; ++w) threads.emplace_back(work, w);
-    // this thread plans block 0, then shows the progress until the others are done
+    for (std::size_t w = 0; w < workers; ++w) {
+      try {
+        threads.emplace_back(work, w);
+      } catch (const std::exception&) {  // no thread to be had: this block here, in this thread
+        work(w);
+      }
+    }
     const double t0 = now_s();
-    work(0);
+    double last_shown = t0;
     bool shown = false;
-    while (progress && done.load() < n) {
-      if (now_s() - t0 > 0.5) {
+    while (working.load() > 0) {
+      // a line after the first half second, then four a second
+      if (progress && now_s() - t0 > 0.5 && now_s() - last_shown > 0.25) {
         err << "\rplanning: " << done.load() << "/" << n << " runs loaded" << std::flush;
         shown = true;
+        last_shown = now_s();
       }
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
     for (std::thread& t : threads) t.join();
-    if (progress && (shown || now_s() - t0 > 0.5)) err << "\r\033[K" << std::flush;
+    if (shown) err << "\r\033[K" << std::flush;
   }
   std::vector<std::string> problems;
   std::set<std::string> problem_set;
