@@ -26,7 +26,8 @@ nothing is written and the exit status is 1.
 Conventions, the same in every figure: SI units as the column suffixes say (speed in m/s,
 torque in N m, angular speed in rad/s; power in kW, the W column / 1000); SOC and efficiency
 in % (axis label "SOC [%]"); every legend outside its axes, to the right, so it never hides
-a curve.  As a module: draw_run(cols, scenario) and sweep_figures(src) return the finished
+a curve; a run with faults shades the spans each acted (faults_active, names from
+summary.json's test.faults) on every panel over time.  As a module: draw_run(cols, scenario) and sweep_figures(src) return the finished
 matplotlib figures without writing them (the tests inspect those).
 """
 import csv
@@ -106,11 +107,32 @@ def load_summary(path):
         return {}
 
 
-class Run:
-    """One run's columns, its time axis and the title prefix; makes the stacked figures."""
+def fault_spans(t, bits, bit):
+    """[(t0, t1)] where bit is set in the faults_active column (a test's fault i: bit i)."""
+    on = (np.nan_to_num(bits).astype(np.int64) & (1 << bit)) != 0
+    out, start = [], None
+    for k in range(len(t)):
+        if on[k] and start is None:
+            start = t[k]
+        if not on[k] and start is not None:
+            out.append((start, t[k]))
+            start = None
+    if start is not None:
+        out.append((start, t[-1]))
+    return out
 
-    def __init__(self, cols, scenario=""):
-        self.c, self.scenario = cols, scenario
+
+FAULT_COLORS = ["tab:red", "tab:purple", "tab:brown", "tab:pink", "tab:olive", "tab:cyan"]
+
+
+class Run:
+    """One run's columns, its time axis and the title prefix; makes the stacked figures.
+    faults: summary.json's test.faults ([{"name", "kind", ...}], bit i of faults_active is
+    fault i): each figure over time shades the spans they acted."""
+
+    def __init__(self, cols, scenario="", faults=None):
+        self.c, self.scenario, self.faults = cols, scenario, list(faults or [])
+        self.time_axes = {}  # id(figure) -> its axes over time (those figure() made)
         if "time_s" in cols:
             self.t, self.tlabel = cols["time_s"], "time [s]"
         else:
@@ -137,7 +159,26 @@ class Run:
         for ax in axes:
             ax.grid(True, alpha=0.4)
         axes[-1].set_xlabel(self.tlabel)
+        self.time_axes[id(fig)] = axes
         return fig, axes
+
+    def shade_faults(self, fig):
+        """The spans each active fault acted, shaded on every panel of a figure over time and
+        named once in its first panel's legend (nothing when no fault acted)."""
+        axes = self.time_axes.get(id(fig), [])
+        bits = self.c.get("faults_active")
+        if not axes or bits is None or not np.any(np.nan_to_num(bits)):
+            return
+        count = max(len(self.faults), int(np.nan_to_num(bits).max()).bit_length())
+        for ax in axes:
+            xlim = ax.get_xlim()  # a span must not widen the axis
+            for i in range(count):
+                f = self.faults[i] if i < len(self.faults) else {}
+                label = f"fault {f.get('name', i + 1)} ({f.get('kind', 'active')})"
+                for k, (a, b) in enumerate(fault_spans(self.t, bits, i)):
+                    ax.axvspan(a, b, color=FAULT_COLORS[i % len(FAULT_COLORS)], alpha=0.12, lw=0,
+                               label=label if k == 0 and ax is axes[0] else None)
+            ax.set_xlim(xlim)
 
     # panels more than one figure draws
     def torque_panel(self, ax, req, deliv, lim, ylabel="torque [N m]"):
@@ -559,14 +600,16 @@ def finish(fig):
     return fig
 
 
-def draw_run(cols, scenario=""):
-    """(family, [(file name, finished figure)]) for a run's columns; nothing is written."""
+def draw_run(cols, scenario="", faults=None):
+    """(family, [(file name, finished figure)]) for a run's columns (faults: summary.json's
+    test.faults, for the shaded spans); nothing is written."""
     family = family_of(cols)
-    r = Run(cols, scenario)
+    r = Run(cols, scenario, faults)
     figures = []
     for name, draw in FAMILIES.get(family, []):
         fig = draw(r)
         if fig is not None:
+            r.shade_faults(fig)
             figures.append((name, finish(fig)))
     return family, figures
 
@@ -770,8 +813,11 @@ def main(argv):
             raise PlotError(f"{shown_src}: the run wrote no timeseries.csv (output.timeseries = false in "
                             "its scenario or --set): nothing to draw; run it again with output.timeseries = true")
         cols = load_csv(csv_path)
-        scenario = load_summary(os.path.join(src, "summary.json")).get("scenario")
-        figures = draw_run(cols, str(scenario) if scenario else "")[1]
+        summary = load_summary(os.path.join(src, "summary.json"))
+        scenario = summary.get("scenario")
+        test = summary.get("test") if isinstance(summary.get("test"), dict) else {}
+        faults = [f for f in test.get("faults", []) if isinstance(f, dict)]
+        figures = draw_run(cols, str(scenario) if scenario else "", faults)[1]
     for name, fig in figures:
         save(fig, out_dir, name, dpi)
         if not quiet:

@@ -24,6 +24,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from plot import fault_spans as spans  # noqa: E402  (beside this file, installed with it)
+
 LEGEND = dict(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, fontsize="small")
 
 
@@ -35,21 +38,6 @@ def load_csv(path):
     for i, name in enumerate(header):
         cols[name] = np.array([float(r[i]) if r[i] else np.nan for r in data])
     return cols
-
-
-def spans(t, bits, bit):
-    """[(t0, t1)] where bit is set in the faults_active column."""
-    on = (bits.astype(np.int64) & (1 << bit)) != 0
-    out, start = [], None
-    for k in range(len(t)):
-        if on[k] and start is None:
-            start = t[k]
-        if not on[k] and start is not None:
-            out.append((start, t[k]))
-            start = None
-    if start is not None:
-        out.append((start, t[-1]))
-    return out
 
 
 def draw(cols, test, e):

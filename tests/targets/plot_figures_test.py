@@ -281,6 +281,40 @@ def main():
               f"output.timeseries = false: exit 1, one line naming {shown!r} and the key, nothing written "
               f"(rc {r.returncode}, {r.stderr.strip()!r})")
 
+        # a run with faults: every figure over time shades the span each fault acted (from
+        # faults_active), named once in its legend, and the legend still covers no data; the
+        # same run without faults shades nothing
+        for faults in ([], ["kind=no_start at_s=10 until_s=30", "kind=offset target=batSOC offset=0.01 at_s=40"]):
+            run = os.path.join(root, "faulted" if faults else "unfaulted")
+            argv = [EHPT, "run", os.path.join(SRC, "scenarios", "psecu2_nedc.toml"), "--quiet", "--set",
+                    "solver.duration_s=60", "--out", run]
+            for f in faults:
+                argv += ["--fault", f]
+            r = subprocess.run(argv, capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=300)
+            if not check(r.returncode == 0, f"faults {faults}: ehpt run exits 0 ({r.stderr.strip()[-300:]!r})"):
+                continue
+            cols = plot.load_csv(os.path.join(run, "timeseries.csv"))
+            test = plot.load_summary(os.path.join(run, "summary.json")).get("test", {})
+            _, figures = plot.draw_run(cols, "psecu2_nedc", test.get("faults", []))
+            for name, fig in figures:
+                spans = {}
+                for ax in fig.axes:
+                    for p in ax.patches:
+                        xs = np.asarray(p.get_xy())[:, 0]
+                        spans.setdefault(ax.get_xlabel() or "panel", set()).add((round(xs.min(), 3), round(xs.max(), 3)))
+                first = fig.axes[0].get_legend_handles_labels()[1]
+                if faults:
+                    want = {(10.0, 30.0), (40.0, 60.0)}
+                    check(all(s == want for s in spans.values()) and len(spans) >= 1 and
+                          "fault fault1 (no_start)" in first and "fault fault2 (offset)" in first,
+                          f"faulted/{name}: each panel shades [10, 30] s and [40, 60] s, named in the legend "
+                          f"({spans}, {first})")
+                    check_legends(f"faulted/{name}", fig)
+                else:
+                    check(not spans and not any(l.startswith("fault ") for l in first),
+                          f"unfaulted/{name}: nothing shaded ({spans})")
+                plot.plt.close(fig)
+
         sweep = os.path.join(root, "sweep")
         truth = write_sweep(sweep)
         figures = plot.sweep_figures(sweep)
