@@ -43,6 +43,10 @@ bool is_earlier_bench(const std::string& dir, std::string& why_not) {
     if (is_file && (name == "bench.json" || name == "bench.txt" || leftover_of(name, "bench.json") ||
                     leftover_of(name, "bench.txt"))) {
       ours = true;
+    } else if (is_file && std::any_of(kInputFiles.begin(), kInputFiles.end(), [&](const std::string& f) {
+                 return name == f || leftover_of(name, f);
+               })) {
+      ours = true;
     } else if (is_dir && name == "logs") {
       ours = true;
       for (fs::directory_iterator l(it->path(), ec), lend; !ec && l != lend; l.increment(ec)) {

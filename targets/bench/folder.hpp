@@ -2,7 +2,8 @@
 #pragma once
 // The bench's output folder (default bench-out): made fresh, or empty, or an earlier bench
 // (bench.json with our format line and nothing but the names of kRunDirs, logs/, bench.json,
-// bench.txt, and what ehpt leaves beside a run stopped hard); anything else is refused.
+// bench.txt, the bench's own input files (kInputFiles), and what ehpt leaves beside a run
+// stopped hard); anything else is refused.
 
 #include <string>
 

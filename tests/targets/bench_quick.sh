@@ -129,6 +129,16 @@ for s in ("ev_nedc", "psecu2_nedc"):
         check(abs(r["dfuel_pct"]) <= 0.1, "cvode %s: fuel differs by %g %%" % (s, r["dfuel_pct"]))
     check(positive(r["wall_ratio"]), "cvode %s: wall_ratio" % s)
 
+# (g): the quick plan is 10^4 runs, every one valid; its time and memory as --plan printed them
+sp = b["sweep_plan"]
+if check(sp["status"] == "ok", "sweep_plan.status %r" % sp["status"]):
+    check(sp["runs"] == 10000 and sp["target_runs"] == 100000, "sweep_plan runs %r" % sp["runs"])
+    check(positive(sp["wall_s"]) and positive(sp["peak_rss_MB"]) and positive(sp["cpus"]),
+          "sweep_plan figures %r" % sp)
+    line = open(path.rsplit("/", 1)[0] + "/logs/plan.out").read().strip().splitlines()[-1]
+    check("10000 runs, every one valid; planned in %.2f s on %d CPUs, peak memory %.1f MB" %
+          (sp["wall_s"], sp["cpus"], sp["peak_rss_MB"]) in line, "sweep_plan figures are --plan's: %r" % line)
+
 if problems:
     print("bench.json: %d problem(s):" % len(problems))
     for p in problems:
@@ -136,3 +146,24 @@ if problems:
     sys.exit(1)
 print("bench.json: every section present and sane; determinism and the CVODE bounds hold")
 PY
+
+# The folder rule, both ways: a bench into an earlier bench's folder (with the inputs it wrote
+# for its runs) starts (stopped here after a few seconds: SIGINT, exit 130); a folder that
+# also holds a file of someone else's is refused before anything is written, the file kept.
+rc2=0
+timeout --preserve-status -s INT 5 "$ehpt" bench --quick --out "$out" --quiet 2> "$out.again.err" || rc2=$?
+if [ "$rc2" != 130 ] || grep -q "choose another --out" "$out.again.err"; then
+  echo "a bench into an earlier bench's folder: exit $rc2 (want 130, stopped): $(head -c 400 "$out.again.err")"
+  exit 1
+fi
+echo "my notes" > "$out/notes.txt"
+rc3=0
+"$ehpt" bench --quick --out "$out" --quiet 2> "$out.foreign.err" || rc3=$?
+kept="$(cat "$out/notes.txt")"
+rm -f "$out/notes.txt" "$out.again.err"
+if [ "$rc3" != 1 ] || ! grep -q "notes.txt" "$out.foreign.err" || [ "$kept" != "my notes" ]; then
+  echo "a folder with a foreign file: exit $rc3 (want 1), the file named and kept: $(head -c 400 "$out.foreign.err")"
+  exit 1
+fi
+rm -f "$out.foreign.err"
+echo "bench folder rules ok"
