@@ -361,6 +361,22 @@ def test_plan(ehpt, tmp):
           "... the same problems as the sweep gives, nothing created")
     r = sweep(ehpt, camp, "--plan", "--out", fresh)
     check(r.returncode == 1 and "--plan" in r.stderr and not os.path.exists(fresh), "--plan with --out: usage error, exit 1")
+    # two scenario files of the same bytes are one run twice (one id): the campaign's problem,
+    # said once, before anything runs
+    src = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scenarios", "ev_nedc.toml")
+    with open(src) as f:
+        text = f.read()
+    for d in ("a", "b"):
+        os.makedirs(os.path.join(tmp, "twins", d), exist_ok=True)
+        with open(os.path.join(tmp, "twins", d, "s.toml"), "w") as f:
+            f.write(text.replace('"../', '"' + os.path.abspath(os.path.join(os.path.dirname(src), "..")) + "/"))
+    twins = os.path.join(tmp, "twins", "c.toml")
+    with open(twins, "w") as f:
+        f.write('scenarios = ["a/s.toml", "b/s.toml"]\n[set]\n"solver.duration_s" = 5\n')
+    for args in (["--plan"], ["--out", fresh]):
+        r = sweep(ehpt, twins, *args)
+        check(r.returncode == 2 and r.stderr.count("runs 0 and 1 are the same run") == 1 and not os.path.exists(fresh),
+              "%s: two scenarios of the same bytes: exit 2, said once, nothing created: %s" % (args[0], r.stderr.strip()[:300]))
 
 
 def test_plot(ehpt, tmp):
