@@ -63,6 +63,16 @@ with tempfile.TemporaryDirectory() as tmp:
           "its failed expectation has its figure (expect_soc_band.png)")
     check(not any(f.startswith("expect_") for f in os.listdir(os.path.join(tmp, "suite", "soc_sensor_stuck"))),
           "a test whose expectations held has no expectation figure")
+    # the same test cut short, before its expected failure: every expectation held, so the test
+    # fails, and says why in the table and the JUnit message (summary.json's first_failure)
+    short_junit = os.path.join(tmp, "short.xml")
+    rc, out, err = run(["test", os.path.join(SRC, "examples", "tests", "soc_stuck_written_to_fail.toml"),
+                        "--set", "solver.duration_s=300", "--out", os.path.join(tmp, "short"), "--junit", short_junit])
+    _, short_cases = cases(short_junit)
+    why = "written to fail (expect_fail = true), but every expectation held"
+    msgs = [r.message for c in short_cases.values() for r in c.result]
+    check(rc == 1 and why in out and any(why in (m or "") for m in msgs),
+          f"written to fail but held: exit 1, the reason in the table and JUnit ({rc}: {out[-300:]} {msgs})")
     with open(os.path.join(xfail_dir, "ehpt-manifest.txt")) as f:
         check("expect_soc_band.png" in f.read(), "the figure is part of the committed run (its manifest lists it)")
     for name in by_name:
