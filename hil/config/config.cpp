@@ -180,8 +180,9 @@ bool load(const std::string& path, const std::vector<std::string>& overrides, co
   out.overrides = overrides;
 
   // layers: each --set, the last given first (the last --set of a key wins), then the file
-  std::vector<toml::table> set_docs(overrides.size());
-  for (std::size_t i = 0; i < overrides.size(); ++i) parse_override(overrides[i], set_docs[i], ctx);
+  std::vector<toml::table> set_storage(overrides.size());
+  std::vector<const toml::table*> set_docs(overrides.size());
+  for (std::size_t i = 0; i < overrides.size(); ++i) set_docs[i] = read_override(overrides[i], set_storage[i], ctx);
   toml::table scenario_storage, base_storage;
   const toml::table* const scenario_read = read_toml(path, scenario_storage, ctx);
   if (scenario_read == nullptr) {
@@ -223,7 +224,7 @@ bool load(const std::string& path, const std::vector<std::string>& overrides, co
     }
   }
   std::vector<Layer> layers;
-  for (auto d = set_docs.rbegin(); d != set_docs.rend(); ++d) layers.push_back({&*d, false});
+  for (auto d = set_docs.rbegin(); d != set_docs.rend(); ++d) layers.push_back({*d, false});
   layers.push_back({&scenario_doc, false});
   if (has_base) layers.push_back({base_read, false});
   Reader sc(layers, "", path, ctx);
@@ -304,7 +305,7 @@ bool load(const std::string& path, const std::vector<std::string>& overrides, co
     return false;
   }
   std::vector<Layer> vlayers;
-  for (auto d = set_docs.rbegin(); d != set_docs.rend(); ++d) vlayers.push_back({d->get_as<toml::table>("vehicle"), false});
+  for (auto d = set_docs.rbegin(); d != set_docs.rend(); ++d) vlayers.push_back({(*d)->get_as<toml::table>("vehicle"), false});
   vlayers.push_back({scenario_doc.get_as<toml::table>("vehicle"), false});
   if (has_base) vlayers.push_back({base_read->get_as<toml::table>("vehicle"), false});
   for (const toml::table* doc : vehicle_docs) vlayers.push_back({doc, true});

@@ -2,6 +2,7 @@
 #include "hil/config/config_reader.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <sstream>
 
@@ -29,7 +30,13 @@ std::string location(const toml::node* n, const std::string& fallback) {
   if (n == nullptr || !n->source().path) return fallback;
   const std::string& p = *n->source().path;
   if (p.rfind("--set", 0) == 0) return p;
-  return p + ":" + std::to_string(n->source().begin.line);
+  // one allocation: every key of every load is located (a sweep's plan loads 10^5 of them)
+  char line[24];
+  const int k = std::snprintf(line, sizeof line, ":%u", static_cast<unsigned>(n->source().begin.line));
+  std::string out;
+  out.reserve(p.size() + static_cast<std::size_t>(k));
+  out.append(p).append(line, static_cast<std::size_t>(k));
+  return out;
 }
 
 namespace {
@@ -219,6 +226,15 @@ bool parse_override(const std::string& text, toml::table& out, Context& ctx) {
     }
   }
   return true;
+}
+
+const toml::table* read_override(const std::string& text, toml::table& storage, Context& ctx) {
+  if (ctx.cache != nullptr) {
+    if (const auto it = ctx.cache->overrides.find(text); it != ctx.cache->overrides.end()) return &it->second;
+  }
+  if (!parse_override(text, storage, ctx)) return &storage;
+  if (ctx.cache != nullptr) return &ctx.cache->overrides.emplace(text, std::move(storage)).first->second;
+  return &storage;
 }
 
 // ---- CSV-backed tables ------------------------------------------------------------------

@@ -60,6 +60,7 @@ struct LoadCache::Files {
   std::map<std::string, File> bytes;
   std::map<std::string, toml::table> toml;
   std::map<std::string, io::CsvTable> csv;
+  std::map<std::string, toml::table> overrides;  // "key=value" as --set gave it, parsed
 };
 }  // namespace ehpt::hil
 
@@ -379,6 +380,9 @@ bool parse_toml(const std::string& path, toml::table& out, Context& ctx, const F
 const toml::table* read_toml(const std::string& path, toml::table& storage, Context& ctx, const FileRef* ref = nullptr);
 // "a.b.c=value" as given to --set: the value as TOML (number, bool, quoted string, array), or text.
 bool parse_override(const std::string& text, toml::table& out, Context& ctx);
+// The same through the context's cache when it has one (a sweep's runs share their values);
+// storage holds it otherwise, or an empty table when it does not parse (the problem in ctx).
+const toml::table* read_override(const std::string& text, toml::table& storage, Context& ctx);
 
 // CSV-backed tables, remembered in ctx so that a problem in a cell is reported at its line.
 // (ctx.cycle_arrays: those numbers instead of the file)

@@ -141,6 +141,16 @@ TEST_F(LoadCacheFiles, ProblemsKeepTheirFileAndLine) {
   EXPECT_TRUE(names_cycle_line) << ::testing::PrintToString(disk.errors);
   LoadCache cache;
   for (int i = 0; i < 3; ++i) expect_same(disk, through(cache, scenario, {}), "load " + std::to_string(i));
+  // an override the model refuses, and one that does not parse, named as given each time
+  // (the parsed --set is shared by the loads that give it)
+  const std::string shipped = test::source_path("scenarios/psecu2_nedc.toml");
+  for (const std::vector<std::string>& sets : {std::vector<std::string>{"vehicle.battery.soc_initial=1.5"},
+                                              std::vector<std::string>{"vehicle.battery.soc_initial=[1,"}}) {
+    const Loaded refused = from_disk(shipped, sets);
+    ASSERT_FALSE(refused.ok) << sets[0];
+    EXPECT_NE(refused.errors[0].find("--set " + sets[0]), std::string::npos) << refused.errors[0];
+    for (int i = 0; i < 2; ++i) expect_same(refused, through(cache, shipped, sets), sets[0] + " " + std::to_string(i));
+  }
   // a file that cannot be read is reported each time, at the key that names it
   const std::string missing = write("m.toml", "vehicle_file = \"nowhere.toml\"\ncycle = \"bad_cycle.csv\"\n");
   const Loaded gone = from_disk(missing, {});
