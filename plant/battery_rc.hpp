@@ -91,11 +91,13 @@ class BatteryRc {
   const BatteryRcConstants& constants() const { return c_; }
   const BatteryRcConstants& healthy_constants() const { return healthy_; }
 
-  // Between steps (a plant fault starts or ends): the pack's constants from its healthy ones.
-  // The states (E, v_rc) stay: the EMF and SOC do not jump; what the two capacitors held
-  // beyond their new size is gone (the plant's energy audit books it). h valid: strings_lost
-  // < strings_parallel, gains > 0, short_A >= 0 (hil/config/test_reader.cpp).
-  void set_health(const BatteryHealth& h) {
+  // Between steps (a plant fault starts or ends), at the pack's state (E, v_rc): its constants
+  // from its healthy ones. The states stay (the EMF and SOC do not jump); what the two
+  // capacitors held beyond their new size is gone, booked in removed_by_faults_J() for the
+  // plant's energy audit. h valid: strings_lost < strings_parallel, gains > 0, short_A >= 0
+  // (hil/config/test_reader.cpp).
+  void set_health(const BatteryHealth& h, double emf_V, double v_rc_V) {
+    const double before_J = stored_energy_J(emf_V, v_rc_V);
     const double keep = static_cast<double>(healthy_.strings_parallel - h.strings_lost) /
                         static_cast<double>(healthy_.strings_parallel);
     c_ = healthy_;
@@ -109,7 +111,10 @@ class BatteryRc {
     inv_r1_Ohm_ = 1.0 / c_.r1_Ohm;
     four_r0_Ohm_ = 4.0 * c_.r0_Ohm;
     short_A_ = h.short_A;
+    removed_by_faults_J_ += before_J - stored_energy_J(emf_V, v_rc_V);
   }
+  // The energy set_health took from the capacitors as they shrank (0 for a healthy pack).
+  double removed_by_faults_J() const { return removed_by_faults_J_; }
 
   // Run phase: pure functions.
   BatteryTerminal terminal(double emf_V, double v_rc_V, double load_power_W) const;
@@ -144,6 +149,7 @@ class BatteryRc {
   double inv_c_batt_F_ = 0.0, inv_c1_F_ = 0.0, inv_r1_Ohm_ = 0.0;
   double four_r0_Ohm_ = 0.0;  // 4 R0, the product terminal() used to form at every call
   double short_A_ = 0.0;      // an internal short's current (0: healthy; + 0.0 changes no bit)
+  double removed_by_faults_J_ = 0.0;
   BatteryRcConstants healthy_;
 };
 

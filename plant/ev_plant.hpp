@@ -232,15 +232,13 @@ class EvPlant : public EvStateLayout {
 
   // Energy audit between x0 and x (end of run; allocates).
   EnergyAudit audit(const State& x0, const State& x) const {
-    return ev_energy_audit(battery_, mass_eff_kg_, p_.body.mass_kg, x0.data(), x.data(), fault_removed_J_);
+    return ev_energy_audit(battery_, mass_eff_kg_, p_.body.mass_kg, x0.data(), x.data());
   }
 
   // Plant faults, between steps only (the run's fault injector; this plant is that run's own).
   static constexpr std::array<const char*, 1> kMachines = {"drive"};
   void set_health(const PlantHealth& h, const State& x) {
-    const double before_J = battery_.stored_energy_J(x[kEmf], x[kVrc]);
-    battery_.set_health(h.battery);
-    fault_removed_J_ += before_J - battery_.stored_energy_J(x[kEmf], x[kVrc]);
+    battery_.set_health(h.battery, x[kEmf], x[kVrc]);
     torque_gain_ = h.torque_gain[0];
   }
 
@@ -404,7 +402,6 @@ class EvPlant : public EvStateLayout {
   double inv_mass_eff_kg_ = 0.0;
   double brake_inertia_kg_ = 0.0;  // after_rotor_inertia: brake_gain * J * G/r (0 otherwise)
   double torque_gain_ = 1.0;       // derating (plant faults): 1 healthy
-  double fault_removed_J_ = 0.0;   // energy the pack's capacitors lost as plant faults shrank them
 };
 
 }  // namespace ehpt::plant

@@ -6,7 +6,8 @@
 namespace ehpt::plant {
 
 EnergyAudit ev_energy_audit(const BatteryRc& battery, double mass_eff_kg, double mass_kg, const double* x0,
-                            const double* x, double fault_removed_J) {
+                            const double* x) {
+  const double fault_removed_J = battery.removed_by_faults_J();
   using L = EvStateLayout;
   const auto delta = [&](int i) { return x[i] - x0[i]; };
   // x0 with the pack as built, x with the pack as it is now; what plant faults took from the

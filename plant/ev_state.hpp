@@ -36,6 +36,6 @@ struct EvStateLayout {
 // The balance above between the states x0 and x (kNumStates values each; end of run, allocates).
 // mass_eff_kg: vehicle + rotor reflected (kinetic energy); mass_kg: the vehicle (potential).
 EnergyAudit ev_energy_audit(const BatteryRc& battery, double mass_eff_kg, double mass_kg, const double* x0,
-                            const double* x, double fault_removed_J = 0.0);
+                            const double* x);
 
 }  // namespace ehpt::plant

@@ -237,7 +237,7 @@ EnergyAudit PsdPlant::audit(const State& x0, const State& x) const {
   const auto delta = [&](int i) { return x[i] - x0[i]; };
   // x0 with the pack as built, x as it is now, less what plant faults took from the capacitors
   const double stored_out_J = battery_.healthy_stored_energy_J(x0[kEmf], x0[kVrc]) -
-                              battery_.stored_energy_J(x[kEmf], x[kVrc]) - fault_removed_J_;
+                              battery_.stored_energy_J(x[kEmf], x[kVrc]) - battery_.removed_by_faults_J();
   const double fuel_J = p_.ice.fuel_lhv_J_kg * delta(kFuelKg);
   const double ice_work_J = delta(kIceWorkJ);
   const double kinetic_J = kinetic_energy_J(x) - kinetic_energy_J(x0);
@@ -265,7 +265,7 @@ EnergyAudit PsdPlant::audit(const State& x0, const State& x) const {
              {"brake_dissipation_J", delta(kBrakeJ)},
              {"kinetic_energy_change_J", kinetic_J},
              {"potential_energy_change_J", potential_J}};
-  if (fault_removed_J_ != 0.0) a.terms.push_back({"battery_removed_by_faults_J", fault_removed_J_});
+  if (battery_.removed_by_faults_J() != 0.0) a.terms.push_back({"battery_removed_by_faults_J", battery_.removed_by_faults_J()});
   return a;
 }
 

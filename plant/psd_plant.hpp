@@ -146,9 +146,7 @@ class PsdPlant {
   // the pack's constants and the machines' derating, in kMachines order.
   static constexpr std::array<const char*, 2> kMachines = {"gen", "mot"};
   void set_health(const PlantHealth& h, const State& x) {
-    const double before_J = battery_.stored_energy_J(x[kEmf], x[kVrc]);
-    battery_.set_health(h.battery);
-    fault_removed_J_ += before_J - battery_.stored_energy_J(x[kEmf], x[kVrc]);
+    battery_.set_health(h.battery, x[kEmf], x[kVrc]);
     torque_gain_ = h.torque_gain;
   }
   const PsdParams& params() const { return p_; }
@@ -179,7 +177,6 @@ class PsdPlant {
   MapDrive gen_, mot_;
   BatteryRc battery_;
   std::array<double, kMaxMachines> torque_gain_ = {1.0, 1.0};  // derating (plant faults): 1 healthy
-  double fault_removed_J_ = 0.0;  // energy the pack's capacitors lost as plant faults shrank them
   VehicleBody body_;
   double rho_ = 0.0;
   double g_over_r_ = 0.0, r_over_g_ = 0.0;

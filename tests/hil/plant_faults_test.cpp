@@ -32,13 +32,13 @@ plant::BatteryRcParams pack(int strings) {
 TEST(BatteryHealth, EachKindScalesItsConstantsAndHealthyRestoresEveryBit) {
   plant::BatteryRc b(pack(4));
   const plant::BatteryRcConstants h = b.constants();
-  b.set_health({.r0_gain = 2.0});
+  b.set_health({.r0_gain = 2.0}, h.emf_initial_V, 0.0);
   EXPECT_EQ(b.constants().r0_Ohm, 2.0 * h.r0_Ohm);
   EXPECT_EQ(b.constants().c_batt_F, h.c_batt_F);
-  b.set_health({.capacity_gain = 0.8});
+  b.set_health({.capacity_gain = 0.8}, h.emf_initial_V, 0.0);
   EXPECT_EQ(b.constants().c_batt_F, h.c_batt_F * 0.8);
   EXPECT_EQ(b.constants().r0_Ohm, h.r0_Ohm);
-  b.set_health({.strings_lost = 1});  // 4 -> 3 strings
+  b.set_health({.strings_lost = 1}, h.emf_initial_V, 0.0);  // 4 -> 3 strings
   EXPECT_DOUBLE_EQ(b.constants().c_batt_F, h.c_batt_F * 0.75);
   EXPECT_DOUBLE_EQ(b.constants().c1_F, h.c1_F * 0.75);
   EXPECT_DOUBLE_EQ(b.constants().r0_Ohm, h.r0_Ohm * 4.0 / 3.0);
@@ -51,13 +51,13 @@ TEST(BatteryHealth, EachKindScalesItsConstantsAndHealthyRestoresEveryBit) {
   const plant::BatteryTerminal four = healthy.at_current(e, 0.0, 40.0);
   EXPECT_DOUBLE_EQ(e - three.voltage_V, e - four.voltage_V);
   // a short: its current in the main branch at no load, its loss behind R0
-  b.set_health({.short_A = 5.0});
+  b.set_health({.short_A = 5.0}, h.emf_initial_V, 0.0);
   const plant::BatteryTerminal s = b.at_current(e, 0.0, 0.0);
   EXPECT_EQ(s.main_A, 5.0);
   EXPECT_EQ(s.loss_W, e * 5.0);
   EXPECT_DOUBLE_EQ(b.demf_dt(s), -5.0 / h.c_batt_F);
   // back to healthy: the constants and a terminal() bit for bit as built
-  b.set_health({});
+  b.set_health({}, h.emf_initial_V, 0.0);
   EXPECT_EQ(b.constants().r0_Ohm, h.r0_Ohm);
   EXPECT_EQ(b.constants().c_batt_F, h.c_batt_F);
   EXPECT_EQ(b.constants().current_max_A, h.current_max_A);
