@@ -491,8 +491,15 @@ bool load(const std::string& name, const std::vector<std::string>& overrides, co
                      "[[fault]] tables, or give the cycle as a file");
     return false;
   }
-  return cycle ? hil::load_scenario_with_cycle(path, overrides, *cycle, sc, errors)
-               : hil::load_scenario(path, overrides, faults, sc, errors);
+  if (!(cycle ? hil::load_scenario_with_cycle(path, overrides, *cycle, sc, errors)
+              : hil::load_scenario(path, overrides, faults, sc, errors))) {
+    return false;
+  }
+  if (const std::string why = hil::bus_faults_refused(sc, nullptr); !why.empty()) {
+    errors.push_back(why);  // the module calls its ECU in-process: no frames for a bus fault to act on
+    return false;
+  }
+  return true;
 }
 
 // faults=None or a list of str, each as `ehpt run --fault` takes it ("kind=stuck target=batSOC

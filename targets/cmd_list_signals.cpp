@@ -5,6 +5,8 @@
 
 #include "ecu/ev_follower.hpp"
 #include "ecu/psd_ecu.hpp"
+#include "hil/bus/bus_binding.hpp"
+#include "hil/bus/bus_plant.hpp"
 #include "hil/config/scenario.hpp"
 #include "msgs/fields.hpp"
 #include "hil/run/simulation.hpp"
@@ -22,12 +24,14 @@ const char* kListHelp =
     "Debian package), the source tree's scenarios/ for an ehpt run from its build folder.\n";
 
 const char* kSignalsHelp =
-    "usage: ehpt signals SCENARIO [--fault-targets]\n"
+    "usage: ehpt signals SCENARIO [--fault-targets [--bus-map FILE]]\n"
     "Lists the columns timeseries.csv can hold for the scenario's vehicle (choose them with\n"
     "[output] signals = [...] in the scenario). Units are the name's suffix. These are what an\n"
     "[[expect]] bounds (docs/testing.md).\n"
     "  --fault-targets  the fields of the vehicle's sensor and command messages instead (the\n"
-    "                   DBC's signal names): what a [[fault]]'s target names\n";
+    "                   DBC's signal names): what a [[fault]]'s target names; and the bus\n"
+    "                   messages a bus fault's target names (drop, delay, corrupt, ...: ehpt's\n"
+    "                   own contract, or with --bus-map FILE that binding's DBC messages)\n";
 
 // The help ends with where this ehpt looks (build folder or installed).
 std::string list_help() {
@@ -80,6 +84,15 @@ int cmd_signals(const std::vector<std::string>& args_in) {
   const auto flag = std::find(args.begin(), args.end(), "--fault-targets");
   const bool targets = flag != args.end();
   if (targets) args.erase(flag);
+  std::string bus_map;
+  if (const auto m = std::find(args.begin(), args.end(), "--bus-map"); targets && m != args.end()) {
+    if (m + 1 == args.end()) {
+      std::cerr << "--bus-map needs a binding file (docs/bus.md)\n";
+      return 2;
+    }
+    bus_map = *(m + 1);
+    args.erase(m, m + 2);
+  }
   if (wants_help(args) || args.size() != 1) {
     if (args.size() != 1) {
       std::cerr << kSignalsHelp;
@@ -112,6 +125,29 @@ int cmd_signals(const std::vector<std::string>& args_in) {
     std::cerr << args[0] << ": this vehicle has no ECU messages (a rig): nothing to fault\n";
     return 2;
   }
+  // the frames a bus fault acts on: the bound contract's messages (hil/bus/bus_faults.hpp)
+  std::vector<std::string> errors;
+  const std::string family = ehpt::hil::bus_family(sc);
+  const std::optional<ehpt::hil::Binding> binding =
+      bus_map.empty() ? ehpt::hil::default_binding(family, sc.ecu_timing.period_s, errors)
+                      : ehpt::hil::load_binding(bus_map, family, sc.ecu_timing.period_s, errors);
+  if (!binding) {
+    for (const std::string& e : errors) std::cerr << e << "\n";
+    return 2;
+  }
+  const auto messages = [&](const char* title, const std::vector<ehpt::hil::BoundMessage>& list) {
+    text += std::string(title) + "\n";
+    for (const ehpt::hil::BoundMessage& m : list) {
+      bool counter = false;
+      for (const auto& b : m.signals) counter = counter || b.role == ehpt::hil::BoundRole::kCounter;
+      const std::string& name = m.message->name;
+      text += "    " + name + std::string(name.size() < 20 ? 20 - name.size() : 1, ' ') +
+              std::to_string(m.message->size_bytes) + " bytes" + (counter ? ", counter" : "") + (m.e2e ? ", E2E" : "") + "\n";
+    }
+  };
+  text += "bus (" + binding->file + "; a bus fault's target; \"bus\" for bus_off)\n";
+  messages("  sent by the plant", binding->send);
+  messages("  sent by the ECU", binding->receive);
   return out(text) ? 0 : 1;
 }
 

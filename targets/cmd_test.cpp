@@ -17,6 +17,9 @@
 
 #include <toml++/toml.h>
 
+#include "hil/bus/bus_binding.hpp"
+#include "hil/bus/bus_faults.hpp"
+#include "hil/bus/bus_plant.hpp"
 #include "hil/config/scenario.hpp"
 #include "hil/run/batch.hpp"
 #include "io/json_value.hpp"
@@ -55,7 +58,9 @@ const char* kTestHelp =
     "                   port + k, default 7667; prefix EHPT_S<k>_). E.g.\n"
     "                   --bus socketcand:127.0.0.1:29600 --ecu-cmd ehpt ecu {test} --bus {bus}\n"
     "                   An ECU that exits non-zero or crashes is a test error (its status and\n"
-    "                   the tail of its log in the report)\n"
+    "                   the tail of its log in the report). Bus faults (drop, delay, corrupt,\n"
+    "                   counter_jump, bus_off, ... on a message's frames) need a socketcand\n"
+    "                   bus; without one, or over LCM, they are refused (exit 2)\n"
     "\n"
     "Every test file is checked before anything runs: a problem is 'file:line: field = value:\n"
     "expectation' (exit 2). A test with [test] expect_fail = true is written to fail: it\n"
@@ -352,6 +357,7 @@ int cmd_test(const std::vector<std::string>& args) {
   for (TestCase& t : tests) {
     hil::Scenario sc;
     std::vector<std::string> e;
+    std::string reason;
     if (!hil::load_scenario(t.path, sets, sc, e)) {
       errors.insert(errors.end(), e.begin(), e.end());
       continue;
@@ -360,6 +366,24 @@ int cmd_test(const std::vector<std::string>& args) {
       errors.push_back(t.path + ": no [[expect]] table: a test states what must hold (docs/testing.md)");
     }
     t.expect_fail = sc.test.expect_fail;
+    // bus faults act on CAN frames: a test with one needs a CAN bus (socketcand) to act on
+    if (!bus.enabled) {
+      if (const std::string why = hil::bus_faults_refused(sc, nullptr); !why.empty()) errors.push_back(why);
+    } else if (bus.lcm) {
+      for (const hil::FaultSpec& f : sc.faults) {
+        if (f.side != hil::FaultSide::kBus) continue;
+        errors.push_back(f.where + ": kind = \"" + hil::fault_effect_name(f.effect) + "\" acts on CAN frames, and --bus " +
+                         bus.spec + " carries LCM messages: run this test over socketcand (--bus socketcand:HOST:PORT)");
+        break;
+      }
+    } else if (hil::can_run_on_bus(sc, reason)) {
+      // the plant runs on ehpt's own contract: its messages, checked now rather than when
+      // the test's turn comes
+      std::optional<hil::Binding> binding = hil::default_binding(hil::bus_family(sc), sc.ecu_timing.period_s, e);
+      hil::BusFaults faults;
+      if (binding) hil::BusFaults::resolve(sc.faults, *binding, sc.solver.step_s, sc.solver.ecu_ratio, faults, e);
+      errors.insert(errors.end(), e.begin(), e.end());
+    }
   }
   if (!errors.empty()) {
     for (const auto& e : errors) std::cerr << e << "\n";

@@ -71,6 +71,7 @@ class BusPlant final : public ExternalDriver,
     if (started_) return;
     started_ = true;
     stop_ = stop;
+    sim_ = &sim;
     wait_for_peer();
     first_command(sim);
     if (!sim.attach(this, opt_.lockstep || opt_.realtime ? nullptr : this)) {
@@ -82,14 +83,22 @@ class BusPlant final : public ExternalDriver,
   bool commands_due(std::int64_t n, Command& command) override {
     if (opt_.lockstep) return false;  // a command answers its sample: taken in sample()
     const IoTime io(*this);
+    read_fault_mask(n);
     return drain(n, command);
   }
   // (b) The sensors at t_n (sample 0 went out at start-up); lockstep waits for its command.
   bool sample(std::int64_t n, const Sensors& s, Command& command) override {
     if (n == last_sample_) return false;
     const IoTime io(*this);
+    read_fault_mask(n);
     send_sample(s, n);
     if (!opt_.lockstep) return false;
+    if (!wire_.sample_intact()) {
+      // a bus fault changed what the ECU got of this sample: it may answer or not, at a time
+      // the plant cannot know, so the plant goes on without its answer (a late one is stale)
+      ++samples_not_awaited_;
+      return false;
+    }
     if (gave_up_waiting_) return drain(n, command);  // no wait: the ECU is gone (see kMaxConsecutiveWaits)
     return wait_for_command(n, command);
   }
@@ -133,6 +142,12 @@ class BusPlant final : public ExternalDriver,
     inputs_buf_.take_handed([&](std::string_view t) { write_inputs(t); });
   }
 
+  bool takes_bus_faults() const override { return Wire::kTakesBusFaults; }
+  LinkFigures link_figures() const override {
+    return {static_cast<double>(timeouts_), static_cast<double>(safe_steps()) * h_s_};
+  }
+  Wire& wire() { return wire_; }  // start-up: its bus faults
+
   CommandSource command_source() const override {
     return {"external", "external ECU over " + wire_.describe() + ", " + pacing(), {}};
   }
@@ -145,8 +160,9 @@ class BusPlant final : public ExternalDriver,
     if (commands_applied_ == 0) {
       why.push_back("no ECU: not one command in the whole session (none connected, or it never answered)");
     }
-    if (timeouts_ > 0) {
-      why.push_back("the ECU's commands timed out " + count(timeouts_, "time", "times") + ": " +
+    if (timeouts_ > fault_timeouts_) {
+      why.push_back("the ECU's commands timed out " + count(timeouts_ - fault_timeouts_, "time", "times") +
+                    (fault_timeouts_ > 0 ? " (and " + std::to_string(fault_timeouts_) + " under bus faults)" : "") + ": " +
                     io::number_text(static_cast<double>(safe_steps()) * h_s_) + " s in the safe state");
     }
     if (waits_timed_out_ > 0) {
@@ -171,6 +187,13 @@ class BusPlant final : public ExternalDriver,
     b.integer("commands_applied", commands_applied_);
     b.integer("stale_samples", stale_samples_);
     b.integer("timeouts", timeouts_);
+    if (wire_.has_faults()) {  // hil/bus/bus_faults.hpp; the faults' own figures are the wire's
+      b.integer("timeouts_under_bus_faults", fault_timeouts_);
+      if (opt_.lockstep) {
+        b.integer("samples_not_awaited", samples_not_awaited_);
+        b.integer("commands_lost_to_faults", commands_lost_to_faults_);
+      }
+    }
     b.number("safe_state_time_s", static_cast<double>(safe_steps()) * h_s_);
     b.number("longest_command_gap_s", static_cast<double>(longest_gap_steps_) * h_s_);
     b.integer("saturated_signals", saturated_);
@@ -228,6 +251,11 @@ class BusPlant final : public ExternalDriver,
     return commands_applied_ > 1 && exchange_s() > 0.0 ? static_cast<double>(commands_applied_ - 1) / exchange_s() : NAN;
   }
   const char* pacing() const { return opt_.lockstep ? "lockstep" : opt_.realtime ? "realtime" : "wall_clock"; }
+
+  // The bus faults acting at step n, for the wire; remembered for the timeouts they cause.
+  void read_fault_mask(std::int64_t n) {
+    if (sim_ != nullptr && wire_.set_fault_mask(sim_->fault_mask())) last_bus_fault_step_ = n;
+  }
 
   // steps spent in the safe state (up to the last one seen, if still in it)
   std::int64_t safe_steps() const { return safe_steps_ + (safe_ ? last_step_ - safe_since_step_ : 0); }
@@ -287,6 +315,10 @@ class BusPlant final : public ExternalDriver,
         round_trip_.record(clock_.now_ns() - sent_ns_);
         consecutive_waits_ = 0;
         return true;
+      }
+      if (wire_.has_faults() && wire_.sample_resolved()) {
+        ++commands_lost_to_faults_;  // all of its frames came; a bus fault kept it from being whole
+        return false;
       }
       const std::int64_t left = deadline - clock_.now_ns();
       if (left <= 0 || stopped()) {
@@ -367,6 +399,8 @@ class BusPlant final : public ExternalDriver,
     safe_ = true;
     safe_since_step_ = n;
     ++timeouts_;
+    // a timeout while (or just after) a bus fault acted is what the fault was for
+    if (last_bus_fault_step_ >= 0 && n - last_bus_fault_step_ <= timeout_steps_ + ratio_) ++fault_timeouts_;
     Command safe = applied_;
     F::make_safe(safe);
     write_command(n, safe, command);
@@ -393,6 +427,11 @@ class BusPlant final : public ExternalDriver,
   bool gave_up_waiting_ = false;     // kMaxConsecutiveWaits reached: no more waits until a command
   std::int64_t gave_up_at_step_ = -1;
   const std::atomic<int>* stop_ = nullptr;  // ends a wait (start-up, lockstep) when non-zero
+  Simulation* sim_ = nullptr;               // its fault mask (bus faults)
+  std::int64_t last_bus_fault_step_ = -1;   // the last step a bus fault acted at
+  std::int64_t fault_timeouts_ = 0;         // timeouts while or just after a bus fault acted
+  std::int64_t samples_not_awaited_ = 0;    // lockstep: samples a bus fault changed (no wait)
+  std::int64_t commands_lost_to_faults_ = 0;  // lockstep: samples whose command a bus fault broke
   std::string attach_error_;
   std::int64_t io_ns_ = 0;  // real time: the hooks' time since take_io_ns
   MonotonicClock rt_clock_;
@@ -429,14 +468,33 @@ std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::can::Tran
     return nullptr;
   }
   const double command_timeout_s = opt.command_timeout_s > 0.0 ? opt.command_timeout_s : 3.0 * sc.ecu_timing.period_s;
+  // the scenario's bus faults on the frames of this binding (none: nothing changes)
+  const auto with_faults = [&](auto plant) -> std::unique_ptr<ExternalDriver> {
+    std::vector<std::string> errors;
+    BusFaults faults;
+    if (!BusFaults::resolve(sc.faults, plant->wire().binding(), sc.solver.step_s, sc.solver.ecu_ratio, faults, errors)) {
+      for (const std::string& e : errors) error += (error.empty() ? "" : "\n") + e;
+      return nullptr;
+    }
+    if (!faults.empty() && opt.lockstep && !plant->wire().binding().echo) {
+      error = sc.name + ": bus faults in lockstep need a binding whose commands echo the sample they answer (" +
+              plant->wire().binding().file + " has no `echo`): without it the plant cannot tell a late frame "
+              "from an answer, and the verdict would depend on timing";
+      return nullptr;
+    }
+    plant->wire().set_faults(std::move(faults));
+    return plant;
+  };
   if (sc.ecu.holds<ecu::PsdEcuParams>()) {
     using S = msgs::PsdSensors;
-    return std::make_unique<BusPlant<S, CanWire<S>>>(sc, opt, bus, std::move(binding), sc.solver.step_s, opt.lockstep,
-                                                     command_timeout_s, opt.log_interface, opt.asc_log);
+    return with_faults(std::make_unique<BusPlant<S, CanWire<S>>>(sc, opt, bus, std::move(binding), sc.solver.step_s,
+                                                                 opt.lockstep, command_timeout_s, opt.log_interface,
+                                                                 opt.asc_log));
   }
   using S = msgs::EvSensors;
-  return std::make_unique<BusPlant<S, CanWire<S>>>(sc, opt, bus, std::move(binding), sc.solver.step_s, opt.lockstep,
-                                                   command_timeout_s, opt.log_interface, opt.asc_log);
+  return with_faults(std::make_unique<BusPlant<S, CanWire<S>>>(sc, opt, bus, std::move(binding), sc.solver.step_s,
+                                                               opt.lockstep, command_timeout_s, opt.log_interface,
+                                                               opt.asc_log));
 }
 
 std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::lcm::LcmBus& bus, const BusPlantOptions& opt,

@@ -18,6 +18,13 @@
 //   or a binding with an echo: per sample), or since the last resync (wall clock without an
 //   echo: the latest value of each signal, as a cyclic ECU sends them); a message older than
 //   its timeout puts the plant in its safe state (message_timed_out).
+//
+// Bus faults (hil/bus/bus_faults.hpp) act on the frames between the plant and the wire: a
+// sent frame as it leaves, a received one before the rules see it; bus.log has the frames as
+// they went on (sent) and as the plant's rules got them (received). In lockstep, a sample is
+// intact when no fault acted on its frames or on the sample's before (else the ECU may or may
+// not answer it: the plant does not wait, and a late answer is stale), and resolved when every frame of its command has
+// come from the ECU, whatever the faults then did to them (the plant need not wait longer).
 
 #include <array>
 #include <cstdint>
@@ -27,6 +34,7 @@
 #include <vector>
 
 #include "hil/bus/bus_binding.hpp"
+#include "hil/bus/bus_faults.hpp"
 #include "hil/bus/bus_family.hpp"
 #include "hil/run/latency_histogram.hpp"
 #include "hil/run/pacer.hpp"
@@ -81,7 +89,28 @@ class CanWire {
       if (!per_sample_) timeout_s_ = std::max(timeout_s_, t);  // per sample: the plant's timeout alone
     }
     for (const auto& [field, value] : binding_.unbound) Fields<Command>()[static_cast<std::size_t>(field)].set(incoming_, value);
+    for (std::size_t j = 0; j < rx_.size(); ++j) {  // resolution (bus faults): each message's fields and echo
+      for (const BoundSignal& b : binding_.receive[j].signals) {
+        if (b.role == BoundRole::kField) rx_[j].field_bits |= b.mask_bit;
+        if (b.role == BoundRole::kEcho) rx_[j].echo = b.signal;
+      }
+    }
   }
+
+  // The scenario's bus faults on this wire's binding (BusFaults::resolve), before the run.
+  void set_faults(BusFaults faults) { faults_ = std::move(faults); }
+  static constexpr bool kTakesBusFaults = true;
+  bool has_faults() const { return !faults_.empty(); }
+  // The faults acting at the exchange about to happen (FaultInjector::mask, this step's).
+  // True if a bus fault acts.
+  bool set_fault_mask(std::uint64_t mask) {
+    fault_mask_ = mask & faults_.bits();
+    return fault_mask_ != 0;
+  }
+  // Lockstep: whether the last sample's frames went out untouched by a fault.
+  bool sample_intact() const { return sample_intact_; }
+  // Lockstep: whether every frame of the last sample's command has come (before the faults).
+  bool sample_resolved() const { return (arrived_mask_ & binding_.complete_mask) == binding_.complete_mask; }
 
   // Cyclic: the command timeout the plant applies to the command as a whole, the longest
   // message timeout (each message also has its own, message_timed_out); per sample: 0 (the
@@ -128,6 +157,15 @@ class CanWire {
   // sensors, then PlantStatus, the end of the sample); returns signals saturated.
   int send_sample(const Sensors& s, std::int64_t step, bool ecu_timeout) {
     int saturated = 0;
+    const auto emit = [&](const io::can::Frame& out) {
+      bus_.send(out);
+      log_frames(std::span<const io::can::Frame>(&out, 1), false);
+    };
+    bool intact = true;
+    if (!faults_.empty()) {  // frames held from earlier samples that are due now go first
+      faults_.release(BusFaults::Direction::kTx, step, emit);
+      faults_.release_held(BusFaults::Direction::kTx, fault_mask_, emit);
+    }
     for (std::size_t i = 0; i < binding_.send.size(); ++i) {
       const BoundMessage& m = binding_.send[i];
       TxState& tx = tx_[i];
@@ -171,10 +209,20 @@ class CanWire {
         io::can::e2e_protect(*m.e2e, data, static_cast<std::uint8_t>(tx.e2e_counter));
         tx.e2e_counter = (tx.e2e_counter + 1) % static_cast<unsigned>(io::can::e2e_counter_modulo(*m.e2e));
       }
-      bus_.send(f);
-      log_frames(std::span<const io::can::Frame>(&f, 1), false);
+      if (faults_.empty()) {
+        emit(f);
+      } else if (!faults_.process(BusFaults::Direction::kTx, i, f, step, fault_mask_, emit)) {
+        intact = false;
+      }
     }
-    if (per_sample_) received_mask_ = 0;  // a command for this sample: all its frames after these
+    // the sample after a faulted one too: its first frame after a gap (or a counter put back)
+    // may be refused by the ECU's counter rule, and then the ECU does not answer
+    sample_intact_ = intact && previous_intact_;
+    previous_intact_ = intact;
+    if (per_sample_) {  // a command for this sample: all its frames after these
+      received_mask_ = 0;
+      arrived_mask_ = 0;
+    }
     return saturated;
   }
 
@@ -183,19 +231,40 @@ class CanWire {
   template <class OnCommand>
   void receive(std::int64_t now_step, std::int64_t sample_step, std::int64_t max_age_steps, OnCommand&& on_command) {
     io::can::Frame buf[64];
+    std::int64_t t_ns = 0;  // when the batch was read (per sample)
+    // one frame as the plant's rules get it (after the faults, if any)
+    const auto take = [&](const io::can::Frame& f) {
+      if (!faults_.empty()) log_frames(std::span<const io::can::Frame>(&f, 1), true);
+      const bool first = received_mask_ == 0;
+      if (!accept(f, now_step, sample_step, max_age_steps)) return;
+      if (per_sample_ && first && received_mask_ != 0) first_frame_ns_ = t_ns;
+      if ((received_mask_ & binding_.complete_mask) != binding_.complete_mask) return;
+      if (per_sample_) {
+        received_mask_ = 0;
+        command_spread_.record(t_ns - first_frame_ns_);
+      }
+      on_command(incoming_);
+    };
+    if (!faults_.empty()) {  // frames delayed to this step, a frame held back by a reorder that ended
+      t_ns = per_sample_ ? clock_.now_ns() : 0;
+      faults_.release(BusFaults::Direction::kRx, now_step, take);
+      faults_.release_held(BusFaults::Direction::kRx, fault_mask_, take);
+    }
     while (const std::size_t k = bus_.receive(buf)) {
-      log_frames(std::span<const io::can::Frame>(buf, k), true);
-      const std::int64_t t_ns = per_sample_ ? clock_.now_ns() : 0;  // when this batch was read
+      if (faults_.empty()) log_frames(std::span<const io::can::Frame>(buf, k), true);
+      t_ns = per_sample_ ? clock_.now_ns() : 0;
       for (std::size_t i = 0; i < k; ++i) {
-        const bool first = received_mask_ == 0;
-        if (!accept(buf[i], now_step, sample_step, max_age_steps)) continue;
-        if (per_sample_ && first && received_mask_ != 0) first_frame_ns_ = t_ns;
-        if ((received_mask_ & binding_.complete_mask) != binding_.complete_mask) continue;
-        if (per_sample_) {
-          received_mask_ = 0;
-          command_spread_.record(t_ns - first_frame_ns_);
+        if (faults_.empty()) {
+          take(buf[i]);
+          continue;
         }
-        on_command(incoming_);
+        const std::size_t j = receive_index(buf[i]);
+        if (j == binding_.receive.size()) {  // no bound message: no fault acts on it
+          take(buf[i]);
+          continue;
+        }
+        note_arrival(j, buf[i], sample_step);
+        faults_.process(BusFaults::Direction::kRx, j, buf[i], now_step, fault_mask_, take);
       }
     }
   }
@@ -307,6 +376,7 @@ class CanWire {
     b.integer("peers_lost", tc.peers_lost);
     b.integer("peers_refused", tc.peers_refused);
     b.integer("peers_evicted", tc.peers_evicted);
+    if (!faults_.empty()) faults_.report(b);
     rejected = total.unknown_id + total.wrong_length + total.bad_crc + total.bad_counter + total.out_of_range +
                total.stale + tc.rx_malformed + before_start_;
   }
@@ -336,12 +406,26 @@ class CanWire {
   }
   // One received frame through the rules (the header's order); true if accepted (its fields
   // are then in incoming_ and their bits in received_mask_).
-  bool accept(const io::can::Frame& f, std::int64_t now_step, std::int64_t sample_step, std::int64_t max_age_steps) {
+  std::size_t receive_index(const io::can::Frame& f) const {
     std::size_t j = 0;
     while (j < binding_.receive.size() &&
            (binding_.receive[j].message->id != f.id || binding_.receive[j].message->extended != f.extended)) {
       ++j;
     }
+    return j;
+  }
+  // Resolution (bus faults, per sample): a frame of message j as the ECU sent it, before the
+  // faults: if it answers this sample (its echo, or none to tell), its fields have come.
+  void note_arrival(std::size_t j, const io::can::Frame& f, std::int64_t sample_step) {
+    if (!per_sample_ || f.len != binding_.receive[j].message->size_bytes) return;
+    if (const io::can::DbcSignal* echo = rx_[j].echo) {
+      const std::uint64_t raw = io::can::extract_raw(*echo, std::span<const std::uint8_t>(f.data.data(), f.len));
+      if (raw != (static_cast<std::uint64_t>(sample_step) & io::can::raw_mask(echo->length))) return;
+    }
+    arrived_mask_ |= rx_[j].field_bits;
+  }
+  bool accept(const io::can::Frame& f, std::int64_t now_step, std::int64_t sample_step, std::int64_t max_age_steps) {
+    const std::size_t j = receive_index(f);
     if (j == binding_.receive.size()) {
       ++unknown_id_;
       return false;
@@ -400,6 +484,7 @@ class CanWire {
       if (r.last_counter >= 0) {
         const int delta = (counter - r.last_counter) & counter_mask;
         if (delta < 1 || delta > io::can::kMaxCounterJump) {
+          r.last_counter = counter;  // the next in order is heard (the codec's rule)
           ++r.counts.bad_counter;
           return false;
         }
@@ -474,6 +559,8 @@ class CanWire {
     std::int64_t timeout_steps = 0;
     std::int64_t timeouts = 0;
     RxCounts counts;
+    std::uint64_t field_bits = 0;               // its fields' bits in the completion mask
+    const io::can::DbcSignal* echo = nullptr;   // its kEcho signal, if any
   };
 
   io::can::Transport& bus_;
@@ -492,6 +579,10 @@ class CanWire {
   std::string log_interface_;
   Command incoming_{};
   std::uint64_t received_mask_ = 0;
+  BusFaults faults_;               // the scenario's bus faults (none: frames pass untouched)
+  std::uint64_t fault_mask_ = 0;   // the bus faults acting at this exchange
+  bool sample_intact_ = true, previous_intact_ = true;
+  std::uint64_t arrived_mask_ = 0;  // the fields of this sample's command that came (before faults)
   std::int64_t before_start_ = 0;  // frames that came before t = 0 (idle)
   io::TextFileWriter log_;
   io::HandoffBuffer log_buf_;

@@ -90,6 +90,13 @@ class LcmWire {
   }
 
   void resync() { last_step_ = -1; }
+  // Bus faults act on CAN frames: an LCM session refuses them (bus_faults_refused), so no
+  // fault ever acts on its messages.
+  static constexpr bool kTakesBusFaults = false;
+  bool has_faults() const { return false; }
+  bool set_fault_mask(std::uint64_t) { return false; }
+  bool sample_intact() const { return true; }
+  bool sample_resolved() const { return false; }
   // one message is the whole command: the plant's own timeout and staleness rule
   bool message_timed_out(std::int64_t) { return false; }
   bool sample_stale(std::int64_t, bool command_since_sample, std::int64_t) const { return !command_since_sample; }

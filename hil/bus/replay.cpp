@@ -2,14 +2,38 @@
 #include "hil/bus/replay.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <vector>
 
 #include "hil/run/port.hpp"
 #include "hil/run/simulation.hpp"
+#include "io/json_value.hpp"
+#include "io/text_file.hpp"
 
 namespace ehpt::hil {
 
 namespace {
+
+// The link figures of a recorded session: bus.timeouts and bus.safe_state_time_s of the
+// summary.json beside its inputs.log; NaN if there is none to read.
+LinkFigures session_link_figures(const std::string& log_path) {
+  LinkFigures f{NAN, NAN};
+  const std::size_t slash = log_path.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? "." : log_path.substr(0, slash);
+  std::string text, reason, error;
+  io::JsonValue v;
+  if (!io::read_text_file(dir + "/summary.json", text, reason) || !io::parse_json(text, v, error)) return f;
+  const io::JsonValue* bus = v.find("bus");
+  if (bus == nullptr) return f;
+  const auto number = [&](const char* key) {
+    const io::JsonValue* x = bus->find(key);
+    return x != nullptr && x->kind == io::JsonValue::Kind::kNumber ? std::strtod(x->text.c_str(), nullptr) : NAN;
+  };
+  f.ecu_timeouts = number("timeouts");
+  f.safe_state_s = number("safe_state_time_s");
+  return f;
+}
 
 // A recorded session as the runner's ECU port: each record acts from the step it acted from
 // in the session, in the same place of the same loop (hil/run/port.hpp) as the bus plant
@@ -20,6 +44,7 @@ class ReplayDriver final : public ExternalDriver, public EcuPort<Sensors, Comman
   ReplayDriver(const InputsLog& log, std::string log_path)
       : log_(log), log_path_(std::move(log_path)), reader_(log_path_, log) {
     has_next_ = reader_.next(next_step_, next_);
+    link_ = session_link_figures(log_path_);
   }
 
   bool open(const io::OutputDir&, std::string&) override { return true; }
@@ -56,6 +81,12 @@ class ReplayDriver final : public ExternalDriver, public EcuPort<Sensors, Comman
     return flush(error);
   }
 
+  // inputs.log holds the commands as the plant applied them, bus faults and all: a replay
+  // reproduces a faulted session without acting them out again
+  bool takes_bus_faults() const override { return true; }
+  // the session's own (its summary.json beside inputs.log): the timeouts are the plant's
+  // judgement of the wall clock, which a replay does not have
+  LinkFigures link_figures() const override { return link_; }
   CommandSource command_source() const override {
     InputFile f = log_.file;
     f.path = log_path_;
@@ -82,6 +113,7 @@ class ReplayDriver final : public ExternalDriver, public EcuPort<Sensors, Comman
   Command next_{};
   std::int64_t applied_ = 0;
   std::string attach_error_;
+  LinkFigures link_;
 };
 
 }  // namespace

@@ -25,6 +25,8 @@ void read_tests(const std::vector<Layer>& layers, Reader& sc, const std::vector<
 inline constexpr std::size_t kMaxFaults = 32;
 // The longest delay, in samples or steps (a delay keeps its history at start-up).
 inline constexpr double kMaxDelaySamples = 1e6;
+// The longest delay of a message's frames, in ECU periods (they wait in a ring of frames).
+inline constexpr double kMaxBusDelaySamples = 1000;
 
 // The summary figures an expectation may check at the end of a run.
 std::span<const std::string_view> expect_figures();

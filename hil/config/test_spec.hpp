@@ -34,12 +34,27 @@ enum class FaultEffect {
   kInternalShort,   // a self-discharge current current_A inside the pack
   kStringLoss,      // `strings` of the pack's parallel strings open
   kDerate,          // the machine's torque bound x gain
+  // bus faults: on the frames of a message of the bound contract (target: its name in the
+  // DBC), in the direction it travels; hil/bus/bus_faults.hpp. (kDelay on a message too.)
+  kDrop,           // each frame lost (all, with `probability`, or by `pattern`)
+  kDuplicate,      // each frame twice
+  kReorder,        // each frame after the next one in its direction
+  kCorrupt,        // byte `byte` of each frame XOR `mask`
+  kCounterFreeze,  // the rolling (or E2E) counter holds the value of its first frame
+  kCounterJump,    // the rolling (or E2E) counter + jump
+  kBadCrc,         // the E2E CRC inverted
+  kStop,           // the sender stops: no frame of the message
+  kPeriod,         // the message every period_s instead of every sample
+  kBusOff,         // target "bus": nothing sent or received (SocketCAN: error frames at its edges)
+  kErrorFrames,    // target "bus": a CAN error frame every sample (SocketCAN only)
 };
-inline bool is_plant_effect(FaultEffect e) { return e >= FaultEffect::kR0Gain; }
+inline bool is_plant_effect(FaultEffect e) { return e >= FaultEffect::kR0Gain && e <= FaultEffect::kDerate; }
+inline bool is_bus_effect(FaultEffect e) { return e >= FaultEffect::kDrop; }
 const char* fault_effect_name(FaultEffect e);
 
-// Which message the target belongs to, or the plant itself.
-enum class FaultSide { kSensor, kCommand, kPlant };
+// Which message the target belongs to, the plant itself, or the frames on the bus (a message
+// of the bound contract, or the whole bus).
+enum class FaultSide { kSensor, kCommand, kPlant, kBus };
 
 // A condition on a plant output, `soc_1 < 0.3` (when = ..., after = ...).
 struct SignalCondition {
@@ -67,7 +82,12 @@ struct FaultSpec {
   double fraction = 0.0, current_A = 0.0;  // capacity_fade, internal_short
   int strings = 0;                         // string_loss
   int machine = -1;                        // derate: the index of its target in the plant's kMachines
-  std::uint64_t seed = 0;  // noise: default 1 + the fault's index, so every fault has its own stream
+  // bus faults (hil/bus/bus_faults.hpp)
+  double probability = 1.0;  // drop: each frame's chance of being lost (seeded)
+  std::string pattern;       // drop: "1" lost, "0" passed, one character per frame, repeated
+  int byte = 0, mask = 0xFF; // corrupt: data[byte] ^= mask
+  int jump = 4;              // counter_jump: added to the counter (mod its range)
+  std::uint64_t seed = 0;  // noise, drop: default 1 + the fault's index, so every fault has its own stream
 };
 
 // How an expectation is judged over time.

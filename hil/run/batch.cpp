@@ -4,6 +4,7 @@
 #include <pthread.h>
 #include <time.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -402,7 +403,9 @@ Report report_of(Simulation& sim, Streamed run) {
 }
 
 // A summary figure an expectation checks (hil/config/test_reader.cpp lists them).
-double figure_value(const std::string& name, const Report& r) {
+double figure_value(const std::string& name, const Report& r, const LinkFigures& link) {
+  if (name == "ecu_timeouts") return link.ecu_timeouts;
+  if (name == "safe_state_s") return link.safe_state_s;
   if (name == "soc_start") return r.fig.soc_start.value_or(NAN);
   if (name == "soc_end") return r.fig.soc_end.value_or(NAN);
   if (name == "soc_delta") return r.fig.soc_start ? *r.fig.soc_end - *r.fig.soc_start : NAN;
@@ -415,7 +418,7 @@ double figure_value(const std::string& name, const Report& r) {
 }
 
 // The verdict of a test: every expectation's outcome as lines, the faults' spans.
-TestVerdict verdict_of(const Scenario& sc, const Report& r) {
+TestVerdict verdict_of(const Scenario& sc, const Report& r, const LinkFigures& link) {
   TestVerdict v;
   v.present = sc.test.is_test;
   if (!v.present) return v;
@@ -426,7 +429,7 @@ TestVerdict verdict_of(const Scenario& sc, const Report& r) {
     const ExpectSpec& e = sc.expects[i];
     ExpectOutcome o = i < r.test.outcomes.size() ? r.test.outcomes[i] : ExpectOutcome{};
     if (!e.figure.empty()) {
-      o = judge_figure(e, figure_value(e.figure, r));
+      o = judge_figure(e, figure_value(e.figure, r, link));
       // a figure of a run that stopped early is not the figure of the run asked for
       if (r.st.fault != 0 || r.run.interrupted_by != 0) {
         o.passed = false;
@@ -761,7 +764,7 @@ void conclude(const Scenario& sc, const Report& r, const ExternalDriver* driver,
   std::vector<std::string> warnings = sc.warnings;
   warnings.insert(warnings.end(), res.warnings.begin(), res.warnings.end());
   if (driver != nullptr) res.degraded = driver->degraded_reasons();
-  res.test = verdict_of(sc, r);
+  res.test = verdict_of(sc, r, driver != nullptr ? driver->link_figures() : LinkFigures{});
   res.summary = summary_json(sc, r, warnings, driver != nullptr ? driver->command_source() : CommandSource{}, res.degraded,
                              res.test);
   res.summary_text = summary_text(sc, r);
@@ -772,7 +775,7 @@ void conclude(const Scenario& sc, const Report& r, const ExternalDriver* driver,
 
 std::string test_verdict_json(const Scenario& sc, Simulation& sim) {
   if (!sc.test.is_test) return "";
-  return test_json(verdict_of(sc, report_of(sim, Streamed{}))).str();
+  return test_json(verdict_of(sc, report_of(sim, Streamed{}), LinkFigures{})).str();
 }
 
 MemoryRun run_in_memory(const Scenario& sc, const std::atomic<int>* stop) {
@@ -800,12 +803,29 @@ MemoryRun run_in_memory(const Scenario& sc, const std::atomic<int>* stop) {
 
 // A batch run: columns, the output folder, the simulation streamed to CSV, the summary, the
 // commit. Each step is one of the functions above.
+std::string bus_faults_refused(const Scenario& sc, const ExternalDriver* driver) {
+  const auto f = std::find_if(sc.faults.begin(), sc.faults.end(), [](const FaultSpec& x) { return x.side == FaultSide::kBus; });
+  if (f == sc.faults.end() || (driver != nullptr && driver->takes_bus_faults())) return "";
+  const std::string what = f->where + ": kind = \"" + fault_effect_name(f->effect) + "\" on " + f->target +
+                           " acts on CAN frames, ";
+  if (driver != nullptr) {
+    return what + "and this session's bus carries none (LCM): run it over socketcand or SocketCAN (--bus socketcand:HOST:PORT)";
+  }
+  return what + "and this run has no bus (the built-in ECU is called in-process): run it with an ECU over a bus, "
+                "`ehpt test FILE --bus socketcand:127.0.0.1:29600 --ecu-cmd ehpt ecu {test} --bus {bus}` (or `ehpt plant`)";
+}
+
 BatchResult run_batch(const Scenario& sc, const BatchOptions& opt, std::ostream& log) {
   BatchResult res;
   // a signal while loading: nothing was run, and an earlier run in DIR stays as it is
   if (opt.stop_signal != nullptr && opt.stop_signal->load() != 0) {
     log << "interrupted by " << signal_name(opt.stop_signal->load()) << " before the run started; nothing was run\n";
     res.exit_code = 128 + opt.stop_signal->load();
+    return res;
+  }
+  if (const std::string why = bus_faults_refused(sc, opt.driver); !why.empty()) {
+    log << "error: " << why << "\n";  // before the output folder: an earlier run in DIR stays
+    res.exit_code = 2;
     return res;
   }
   const std::vector<SignalInfo> signals = scenario_signals(sc);

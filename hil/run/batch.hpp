@@ -5,6 +5,7 @@
 // shutdown may allocate and do I/O; the chunks in between are the run phase.
 
 #include <atomic>
+#include <cmath>
 #include <functional>
 #include <iosfwd>
 #include <limits>
@@ -22,6 +23,15 @@ class Simulation;
 
 // A run whose ECU is outside (a bus target, a replayed session): the simulation is built
 // without its built-in ECU and holds on through faults (an HIL plant reports them on the bus).
+// What the link to an outside ECU did, for a test's figures (`ecu_timeouts`, `safe_state_s`):
+// the commands that timed out, the time the plant spent in its safe state. A run with the
+// built-in ECU has no link: 0 and 0. NaN where a driver cannot tell (an expectation on it
+// then fails, never passes by accident).
+struct LinkFigures {
+  double ecu_timeouts = 0.0;
+  double safe_state_s = 0.0;
+};
+
 // The driver is a port of the runner's step loop (hil/run/port.hpp), plugged in by start();
 // between chunks the batch writes the recorded rows and asks the driver to flush its files.
 class ExternalDriver {
@@ -56,6 +66,11 @@ class ExternalDriver {
   // out, a bus that reported errors or dropped frames); empty if it did. Any reason makes the
   // run's status "degraded" (summary.json status and degraded, the last line, exit 4).
   virtual std::vector<std::string> degraded_reasons() const { return {}; }
+  // Whether it acts out the scenario's bus faults (hil/bus/bus_faults.hpp): a CAN bus plant
+  // does, a replay reads back what they did (inputs.log); every other run refuses them.
+  virtual bool takes_bus_faults() const { return false; }
+  // The end: its figures for a test (LinkFigures).
+  virtual LinkFigures link_figures() const { return {NAN, NAN}; }
 };
 
 struct BatchOptions {
@@ -127,6 +142,11 @@ struct BatchResult {
 };
 
 BatchResult run_batch(const Scenario& scenario, const BatchOptions& options, std::ostream& log);
+
+// "" if this run can act out the scenario's bus faults (none, or a driver that takes them:
+// ExternalDriver::takes_bus_faults); else why not and what would. driver: nullptr for a run
+// with the built-in ECU (ehpt run, the Python module).
+std::string bus_faults_refused(const Scenario& scenario, const ExternalDriver* driver);
 
 // The same run as run_batch with the built-in ECU, as fast as possible, into memory: no folder,
 // no file, no progress line (the Python module's ehpt.run). The rows are the doubles

@@ -3,7 +3,9 @@
 // Faults at the seams where a real one acts (docs/testing.md): on the sensor message the plant
 // sends its ECU (after plant.sense, at each sample), on the command it receives (between the
 // ECU's command and the plant, at every step) and in the plant itself (its pack, its machines:
-// plant/health.hpp, set on the run's own plant where a plant fault starts or ends). Built at start-up from the scenario's
+// plant/health.hpp, set on the run's own plant where a plant fault starts or ends). Bus faults
+// act on frames at the bus plant's wire (hil/bus/bus_faults.hpp); here they have their span
+// and their bit in mask(), which the wire reads at each exchange. Built at start-up from the scenario's
 // FaultSpecs; the run phase allocates nothing, takes no lock and draws its noise from one
 // seeded generator per fault, so a faulted run is the same bit for bit every time (and in a
 // replay of its session).
@@ -140,6 +142,9 @@ class FaultInjector {
         plant_bits_ |= f.bit;  // (the reader refused plant faults on plants that take none)
         continue;
       }
+      // a bus fault acts on frames, at the bus plant's wire (hil/bus/bus_faults.hpp): here only
+      // its span (the mask the wire reads), so a replay of its session has the same column
+      if (s.side == FaultSide::kBus) continue;
       if constexpr (solvers::PlantWithSensors<Plant>) {
         using Sensors = typename Plant::Sensors;
         if (s.side == FaultSide::kSensor) {
@@ -384,6 +389,17 @@ class FaultInjector {
       case FaultEffect::kInternalShort:
       case FaultEffect::kStringLoss:
       case FaultEffect::kDerate: return false;
+      case FaultEffect::kDrop:  // bus faults: on frames, at the bus plant's wire (hil/bus/bus_faults.hpp)
+      case FaultEffect::kDuplicate:
+      case FaultEffect::kReorder:
+      case FaultEffect::kCorrupt:
+      case FaultEffect::kCounterFreeze:
+      case FaultEffect::kCounterJump:
+      case FaultEffect::kBadCrc:
+      case FaultEffect::kStop:
+      case FaultEffect::kPeriod:
+      case FaultEffect::kBusOff:
+      case FaultEffect::kErrorFrames: return false;
     }
     return true;
   }

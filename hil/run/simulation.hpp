@@ -88,6 +88,9 @@ class Simulation {
   virtual RunFigures figures() const = 0;
   // The end: the faults' spans and the expectations' outcomes (allocates).
   virtual TestRecord test_record() { return {}; }
+  // Run phase: the faults acting at the current step (bit i: the scenario's fault[i]); a bus
+  // plant reads it at each exchange for the faults that act on frames (hil/bus/bus_faults.hpp).
+  virtual std::uint64_t fault_mask() const { return 0; }
   // Signals the CAN codec saturated (ecu.codec = "can"; else 0).
   virtual std::int64_t ecu_codec_saturations() const { return 0; }
 };

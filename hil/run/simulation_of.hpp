@@ -72,6 +72,7 @@ class SimulationOf final : public Simulation {
   const MetricTotals& metrics() const override { return runner_->metrics(); }
   plant::EnergyAudit audit() const override { return plant_->audit(runner_->initial_state(), runner_->state()); }
 
+  std::uint64_t fault_mask() const override { return runner_->fault_mask(); }
   TestRecord test_record() override {
     TestRecord t;
     t.faults = faults_->final_spans();

@@ -312,6 +312,7 @@ Reject FrameFilter::accept(const Frame& f, const Freshness* freshness) {
     const int step = counter_step(last_counter_[slot], counter);
     if (step == 0) {
       r = Reject::kBadCounter;
+      last_counter_[slot] = counter;  // the next in order is heard (a repeat changes nothing)
     } else {
       stats_.lost += step - 1;
       last_counter_[slot] = counter;

@@ -68,8 +68,11 @@ const char* reject_name(Reject r);  // "unknown_id", ...
 Reject check_frame(const Frame& f, std::span<const std::uint32_t> accepted_ids);
 // The counter rule (like AUTOSAR E2E's MaxDeltaCounter): a frame is fresh if its counter moved
 // on by 1..kMaxCounterJump since the last accepted frame of its id (the frames in between are
-// counted as lost); a repeat (a frozen sender) or a larger jump is rejected. Without a last
-// counter (start, or after the stream went stale) any counter is accepted.
+// counted as lost); a repeat (a frozen sender) or a larger jump is rejected. A rejected jump's
+// counter becomes the last one (as E2E's receiver keeps the counter after a wrong sequence),
+// so a sender that lost frames is heard again from its next frame in order instead of being
+// shut out until its counter wraps. Without a last counter (start, or after the stream went
+// stale) any counter is accepted.
 inline constexpr int kMaxCounterJump = 3;
 // >= 1: accepted, frames lost in between = result - 1; 0: rejected.
 int counter_step(int last_counter, int counter);

@@ -371,6 +371,12 @@ TEST(Expect, FiguresAtTheEndAndExpectFailTurnsTheVerdict) {
   EXPECT_TRUE(passes("figure = \"soc_delta\"\nmax = 0"));
   EXPECT_FALSE(passes("figure = \"soc_delta\"\nmin = 0.001"));
   EXPECT_TRUE(passes("figure = \"distance_m\"\nmax = 0.001"));
+  // the built-in ECU has no link to time out: 0 timeouts, 0 s in a safe state (over a bus:
+  // tests/targets/bus_faults_e2e_test.py)
+  EXPECT_TRUE(passes("figure = \"ecu_timeouts\"\nvalue = 0\ntol = 0"));
+  EXPECT_FALSE(passes("figure = \"ecu_timeouts\"\nmin = 1"));
+  EXPECT_TRUE(passes("figure = \"safe_state_s\"\nmax = 0"));
+  EXPECT_FALSE(passes("figure = \"safe_state_s\"\nmin = 0.001"));
   const TestVerdict x = verdict("[test]\nexpect_fail = true\n[[expect]]\nfigure = \"distance_m\"\nmin = 100\n");
   EXPECT_TRUE(x.passed);
   EXPECT_FALSE(x.all_held);
@@ -445,6 +451,64 @@ bool any_error(const std::string& tables, const std::string& what, const std::ve
   }
   ADD_FAILURE() << "no error with \"" << what << "\"; got " << (errors.empty() ? "none" : errors[0]);
   return false;
+}
+
+// Bus faults: every reader rule (the message itself is checked on the binding:
+// tests/hil/bus_faults_test.cpp). The base is an EV: EvSensors1..3, EvCommand.
+TEST(FaultRules, BusFaultRules) {
+  const std::string drop = "[[fault]]\nkind = \"drop\"\ntarget = \"EvCommand\"\n";
+  EXPECT_TRUE(any_error("[[fault]]\nkind = \"drop\"\n", "missing: the message whose frames it acts on"));
+  EXPECT_TRUE(any_error("[[fault]]\nkind = \"bus_off\"\ntarget = \"EvCommand\"\n", "acts on the whole bus"));
+  EXPECT_TRUE(any_error("[[fault]]\nkind = \"drop\"\ntarget = \"bus\"\n", "acts on one message's frames"));
+  EXPECT_TRUE(any_error("[[fault]]\nkind = \"corrupt\"\ntarget = \"EvCommand\"\nbyte = 64\n", "must be a byte of the frame"));
+  EXPECT_TRUE(any_error("[[fault]]\nkind = \"corrupt\"\ntarget = \"EvCommand\"\nbyte = -1\n", "must be a byte of the frame"));
+  EXPECT_TRUE(any_error("[[fault]]\nkind = \"corrupt\"\ntarget = \"EvCommand\"\nmask = 0\n", "mask = 0: must be 1 .. 255"));
+  EXPECT_TRUE(any_error("[[fault]]\nkind = \"corrupt\"\ntarget = \"EvCommand\"\nmask = 256\n", "must be 1 .. 255"));
+  EXPECT_TRUE(any_error("[[fault]]\nkind = \"counter_jump\"\ntarget = \"EvCommand\"\njump = 0\n", "jump = 0: must be a whole number 1 .. 65535"));
+  EXPECT_TRUE(any_error(drop + "probability = 0\n", "probability = 0: must be in (0, 1]"));
+  EXPECT_TRUE(any_error(drop + "probability = 1.5\n", "must be in (0, 1]"));
+  EXPECT_TRUE(any_error(drop + "pattern = \"0120\"\n", "must be 1 .. 1000 characters of 0 and 1"));
+  EXPECT_TRUE(any_error(drop + "pattern = \"000\"\n", "at least one 1"));
+  EXPECT_TRUE(any_error(drop + "pattern = \"01\"\nprobability = 0.5\n", "give probability or pattern, not both"));
+  EXPECT_TRUE(any_error("[[fault]]\nkind = \"period\"\ntarget = \"EvCommand\"\nperiod_s = 0.015\n",
+                        "must be a whole multiple of the ECU period"));
+  EXPECT_TRUE(any_error("[[fault]]\nkind = \"period\"\ntarget = \"EvCommand\"\nperiod_s = 0.01\n", "at least two"));
+  EXPECT_TRUE(any_error("[[fault]]\nkind = \"period\"\ntarget = \"EvCommand\"\nperiod_s = 1e5\n", "more than 1e6 samples"));
+  EXPECT_TRUE(any_error("[[fault]]\nkind = \"delay\"\ntarget = \"EvCommand\"\ndelay_s = 0.015\n",
+                        "delayed by whole ECU periods"));
+  EXPECT_TRUE(any_error("[[fault]]\nkind = \"delay\"\ntarget = \"EvCommand\"\ndelay_s = 20\n", "frames wait in a ring"));
+  // a delay on a typo of a field is named as one, not taken for a message
+  EXPECT_TRUE(any_error("[[fault]]\nkind = \"delay\"\ntarget = \"sped_m_s\"\ndelay_s = 0.01\n", "did you mean \"speed_m_s\""));
+  // pattern from --fault is text (0011 is no number), so its own rule judges it
+  EXPECT_TRUE(any_error("", "give probability or pattern, not both", {"kind=drop target=EvCommand pattern=0011 probability=0.5"}));
+}
+
+// A good bus fault loads with its parameters, on the bus side.
+TEST(FaultRules, BusFaultsLoadWithTheirParameters) {
+  const fs::path file = temp_dir() / "bus.toml";
+  std::ofstream(file) << "scenario = \"" << test::source_path("scenarios/ev_nedc.toml") << "\"\n[solver]\nduration_s = 3\n"
+                      << "[[fault]]\nkind = \"corrupt\"\ntarget = \"EvCommand\"\nbyte = 3\nmask = 0x10\n"
+                      << "[[fault]]\nkind = \"delay\"\ntarget = \"EvSensors2\"\ndelay_s = 0.02\n"
+                      << "[[fault]]\nkind = \"bus_off\"\nat_s = 1\nuntil_s = 2\n";
+  Scenario sc;
+  std::vector<std::string> errors;
+  ASSERT_TRUE(load_scenario(file.string(), {}, {"kind=drop target=EvSensors1 pattern=0011 seed=5"}, sc, errors))
+      << (errors.empty() ? "" : errors[0]);
+  ASSERT_EQ(sc.faults.size(), 4u);
+  for (const FaultSpec& f : sc.faults) EXPECT_EQ(f.side, FaultSide::kBus) << f.target;
+  EXPECT_EQ(sc.faults[0].byte, 3);
+  EXPECT_EQ(sc.faults[0].mask, 0x10);
+  EXPECT_EQ(sc.faults[1].effect, FaultEffect::kDelay);
+  EXPECT_DOUBLE_EQ(sc.faults[1].delay_s, 0.02);
+  EXPECT_EQ(sc.faults[2].target, "bus");
+  EXPECT_EQ(sc.faults[3].pattern, "0011");
+  EXPECT_EQ(sc.faults[3].seed, 5u);
+  // and a run without a bus refuses them, naming the first
+  const std::string why = bus_faults_refused(sc, nullptr);
+  EXPECT_NE(why.find("bus.toml:4: kind = \"corrupt\" on EvCommand acts on CAN frames"), std::string::npos) << why;
+  sc.faults.erase(sc.faults.begin(), sc.faults.begin() + 3);
+  sc.faults.erase(sc.faults.begin());
+  EXPECT_EQ(bus_faults_refused(sc, nullptr), "");
 }
 
 TEST(FaultRules, EveryOtherFaultRule) {

@@ -879,6 +879,24 @@ TEST(CanDecode, CounterRuleAcceptsJumpsOfOneToThree) {
   for (int c = 0; c < 16; ++c) EXPECT_EQ(counter_step(-1, c), 1);  // no last counter: any
 }
 
+// A sender that lost more frames than the rule allows (or whose counter a fault moved) is
+// refused once and heard again from its next frame in order, as an E2E receiver does after a
+// wrong sequence; a frozen sender stays refused.
+TEST(CanDecode, FilterHearsASenderAgainAfterARefusedJump) {
+  FrameFilter filter(kPsdCommandIds);
+  TxCounters tx;
+  std::array<Frame, 2> f;
+  encode(msgs::PsdCommand{}, tx, f);
+  EXPECT_EQ(filter.accept(with_counter(f[0], 1)), Reject::kNone);
+  EXPECT_EQ(filter.accept(with_counter(f[0], 9)), Reject::kBadCounter);  // a jump of 8
+  EXPECT_EQ(filter.accept(with_counter(f[0], 10)), Reject::kNone);       // the next in order
+  EXPECT_EQ(filter.accept(with_counter(f[0], 10)), Reject::kBadCounter);  // a repeat
+  EXPECT_EQ(filter.accept(with_counter(f[0], 10)), Reject::kBadCounter);  // still
+  EXPECT_EQ(filter.accept(with_counter(f[0], 11)), Reject::kNone);
+  EXPECT_EQ(filter.stats().lost, 0);
+  EXPECT_EQ(filter.stats().bad_counter, 3);
+}
+
 TEST(CanDecode, FilterCountsEveryReasonAndRejectedFramesChangeNothing) {
   FrameFilter filter(kPsdCommandIds);
   msgs::PsdCommand cmd{};
@@ -923,9 +941,14 @@ TEST(CanDecode, FilterCountsEveryReasonAndRejectedFramesChangeNothing) {
   EXPECT_EQ(feed(seven), Reject::kWrongLength);
   EXPECT_EQ(feed(empty), Reject::kWrongLength);
   EXPECT_EQ(feed(with_counter(bad[0], 5)), Reject::kBadCounter);  // a repeat: a frozen sender
+  // a larger jump is rejected and its counter kept (the next in order would be heard): each
+  // jump from the last rejected one, 5 + 4 + 5 + ... + 15 = 7 (mod 16) at the end
+  int last = 5;
   for (int jump = 4; jump <= 15; ++jump) {
-    EXPECT_EQ(feed(with_counter(bad[0], (5 + jump) % 16)), Reject::kBadCounter) << jump;
+    last = (last + jump) % 16;
+    EXPECT_EQ(feed(with_counter(bad[0], last)), Reject::kBadCounter) << jump;
   }
+  ASSERT_EQ(last, 7);
   Frame beyond = frame_of(kPsdCommand1, field_bits(524287, 0, 20) | field_bits(6, 60, 4));
   EXPECT_EQ(feed(beyond), Reject::kOutOfRange);
   Frame below = frame_of(kPsdCommand1, field_bits(-500001, 20, 20) | field_bits(6, 60, 4));
@@ -944,14 +967,14 @@ TEST(CanDecode, FilterCountsEveryReasonAndRejectedFramesChangeNothing) {
   EXPECT_EQ(s.lost, 0);
 
   // jumps of 1, 2, 3 are accepted (1 and 2 frames lost), across the wrap 15 -> 0
-  EXPECT_EQ(feed(with_counter(bad[0], 6)), Reject::kNone);   // 5 -> 6
+  EXPECT_EQ(feed(with_counter(bad[0], 8)), Reject::kNone);   // 7 (the last jump, kept) -> 8
   EXPECT_EQ(cmd.icePowRef_W, -2000.0);
   EXPECT_TRUE(cmd.iceON);
-  EXPECT_EQ(feed(with_counter(good[0], 8)), Reject::kNone);  // 6 -> 8: one lost
+  EXPECT_EQ(feed(with_counter(good[0], 10)), Reject::kNone);  // 8 -> 10: one lost
   EXPECT_EQ(cmd.icePowRef_W, 1000.0);
-  EXPECT_EQ(feed(with_counter(bad[0], 11)), Reject::kNone);  // 8 -> 11: two lost
-  EXPECT_EQ(feed(with_counter(bad[0], 14)), Reject::kNone);  // 11 -> 14: two lost
-  EXPECT_EQ(feed(with_counter(bad[0], 1)), Reject::kNone);   // 14 -> 1: three steps, two lost
+  EXPECT_EQ(feed(with_counter(bad[0], 13)), Reject::kNone);  // 10 -> 13: two lost
+  EXPECT_EQ(feed(with_counter(bad[0], 0)), Reject::kNone);   // 13 -> 0: three steps, two lost
+  EXPECT_EQ(feed(with_counter(bad[0], 3)), Reject::kNone);   // 0 -> 3: two lost
   EXPECT_EQ(feed(with_counter(bad[1], 12)), Reject::kNone);  // the other id: 11 -> 12
   EXPECT_EQ(cmd.genTauRef_Nm, 77.0);
   s = filter.stats();

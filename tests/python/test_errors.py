@@ -59,6 +59,15 @@ class LoadErrors(unittest.TestCase):
         with self.assertRaises(TypeError):
             ehpt.run("ev_nedc", set=[("solver.duration_s", 1)])
 
+    def test_bus_faults_need_a_bus(self):
+        # the module calls its ECU in-process: no frames for a bus fault to act on
+        for call in (lambda: ehpt.run("psecu2_nedc", faults=["kind=drop target=PsdCommand1 at_s=1"]),
+                     lambda: ehpt.Simulation("psecu2_nedc", faults=["kind=drop target=PsdCommand1 at_s=1"])):
+            with self.assertRaises(ValueError) as cm:
+                call()
+            self.assertIn("kind = \"drop\" on PsdCommand1 acts on CAN frames", str(cm.exception))
+            self.assertIn("--bus socketcand", str(cm.exception))
+
     def test_external_ecu_needs_an_ecu(self):
         with self.assertRaises(ValueError) as cm:
             ehpt.Simulation("battery_cc_discharge", external_ecu=True)
