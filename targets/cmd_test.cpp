@@ -381,7 +381,8 @@ int cmd_test(const std::vector<std::string>& args) {
       // the test's turn comes
       std::optional<hil::Binding> binding = hil::default_binding(hil::bus_family(sc), sc.ecu_timing.period_s, e);
       hil::BusFaults faults;
-      if (binding) hil::BusFaults::resolve(sc.faults, *binding, sc.solver.step_s, sc.solver.ecu_ratio, faults, e);
+      // (socketcand: no error frames)
+      if (binding) hil::BusFaults::resolve(sc.faults, *binding, sc.solver.step_s, sc.solver.ecu_ratio, false, faults, e);
       errors.insert(errors.end(), e.begin(), e.end());
     }
   }

@@ -32,7 +32,8 @@ const io::can::DbcSignal* counter_of(const BoundMessage& m) {
 }  // namespace
 
 bool BusFaults::resolve(const std::vector<FaultSpec>& faults, const Binding& binding, double step_s,
-                        std::int64_t ecu_ratio, BusFaults& out, std::vector<std::string>& errors) {
+                        std::int64_t ecu_ratio, bool error_frames_ok, BusFaults& out,
+                        std::vector<std::string>& errors) {
   out = BusFaults{};
   std::vector<std::string> names;
   for (const BoundMessage& m : binding.send) names.push_back(m.message->name);
@@ -44,9 +45,9 @@ bool BusFaults::resolve(const std::vector<FaultSpec>& faults, const Binding& bin
     if (s.side != FaultSide::kBus) continue;
     const std::string label = s.where + ": fault[" + std::to_string(i) + "] (kind = \"" +
                               fault_effect_name(s.effect) + "\", target = \"" + s.target + "\")";
-    if (s.effect == FaultEffect::kErrorFrames) {
-      errors.push_back(label + ": CAN error frames are not sent by any transport of this build (socketcand "
-                       "cannot carry them, SocketCAN's error-frame path is not built yet); bus_off silences the bus");
+    if (s.effect == FaultEffect::kErrorFrames && !error_frames_ok) {
+      errors.push_back(label + ": CAN error frames need a bus that carries them: SocketCAN (--bus socketcan:vcan0); "
+                       "socketcand's protocol has none (bus_off silences the bus on any CAN transport)");
       continue;
     }
     Fault x;
@@ -55,8 +56,15 @@ bool BusFaults::resolve(const std::vector<FaultSpec>& faults, const Binding& bin
     x.kind = fault_effect_name(s.effect);
     x.name = s.target;
     x.ecu_ratio = std::max<std::int64_t>(1, ecu_ratio);
+    if (s.effect == FaultEffect::kErrorFrames) {  // frames of their own, once per sample
+      x.whole_bus = true;
+      out.faults_.push_back(x);
+      out.bits_ |= x.bit;
+      continue;
+    }
     if (s.effect == FaultEffect::kBusOff) {  // every message, both ways
       x.whole_bus = true;
+      x.error_edges = error_frames_ok;
       x.direction = Direction::kTx;
       out.faults_.push_back(x);
       x.direction = Direction::kRx;
@@ -190,11 +198,14 @@ void BusFaults::report(io::JsonObject& bus) const {
     const Fault& x = faults_[i];
     if (x.whole_bus && x.direction == Direction::kRx) continue;  // bus_off: one entry (its Tx one)
     std::int64_t frames = x.frames;
-    if (x.whole_bus && i + 1 < faults_.size()) frames += faults_[i + 1].frames;  // both directions
+    if (x.effect == FaultEffect::kBusOff && i + 1 < faults_.size()) frames += faults_[i + 1].frames;  // both ways
     io::JsonObject o;
     o.text("kind", x.kind);
     o.text("message", x.name);
-    o.text("direction", x.whole_bus ? "both" : x.direction == Direction::kTx ? "plant_to_ecu" : "ecu_to_plant");
+    o.text("direction", x.effect == FaultEffect::kErrorFrames ? "error_frames"
+                        : x.whole_bus                          ? "both"
+                        : x.direction == Direction::kTx        ? "plant_to_ecu"
+                                                               : "ecu_to_plant");
     o.integer("frames", frames);
     list.push_back(o);
   }

@@ -16,7 +16,9 @@
 // Per frame, in this order: its content (counter_freeze, counter_jump - the sender's counter,
 // the E2E CRC recomputed -, bad_crc, corrupt: as a wire would damage it), then its delivery:
 // lost (drop, stop, bus_off, a period's skipped sample), held (delay: whole ECU periods),
-// after the next frame (reorder), twice (duplicate).
+// after the next frame (reorder), twice (duplicate). On a bus that carries CAN error frames
+// (SocketCAN), error_frames puts one on it at each sample, and bus_off reports the controller
+// going bus-off where it starts and restarting where it ends.
 
 #include <array>
 #include <cstdint>
@@ -26,6 +28,7 @@
 #include "hil/bus/bus_binding.hpp"
 #include "hil/config/test_spec.hpp"
 #include "io/can/frame.hpp"
+#include "io/can/transport.hpp"
 #include "io/json_writer.hpp"
 
 namespace ehpt::hil {
@@ -38,10 +41,10 @@ class BusFaults {
 
   // The scenario's bus faults on this binding; false and every problem (file:line, the
   // fault, what is wrong, what would do) in errors. step_s, ecu_ratio: the plant's grid
-  // (delays and periods in whole ECU periods). error_frames is refused here: no transport
-  // of this build sends CAN error frames yet.
+  // (delays and periods in whole ECU periods). error_frames: only on a transport that sends
+  // error frames (error_frames_ok: SocketCAN).
   static bool resolve(const std::vector<FaultSpec>& faults, const Binding& binding, double step_s,
-                      std::int64_t ecu_ratio, BusFaults& out, std::vector<std::string>& errors);
+                      std::int64_t ecu_ratio, bool error_frames_ok, BusFaults& out, std::vector<std::string>& errors);
 
   bool empty() const { return faults_.empty(); }
   // the mask bits of the bus faults (FaultInjector::mask's bits)
@@ -102,6 +105,25 @@ class BusFaults {
     return intact;
   }
 
+  // Once per sample, before its frames: the error frames the faults put on the bus, each
+  // through send(io::can::ErrorFrame) (error_frames: one per sample while it acts; bus_off:
+  // kBusOff where it starts, kRestarted where it ends, on a bus that carries them).
+  template <class Send>
+  void error_frames(std::uint64_t mask, Send&& send) {
+    for (Fault& x : faults_) {
+      if (x.direction != Direction::kTx) continue;
+      const bool on = (mask & x.bit) != 0;
+      if (x.effect == FaultEffect::kErrorFrames && on) {
+        send(io::can::ErrorFrame::kBusError);
+        ++x.frames;
+      }
+      if (x.effect == FaultEffect::kBusOff && x.error_edges && on != x.was_on) {
+        send(on ? io::can::ErrorFrame::kBusOff : io::can::ErrorFrame::kRestarted);
+      }
+      x.was_on = on;
+    }
+  }
+
   // Before a direction's frames at step: the delayed frames now due, in the order they were
   // held; true if there was none (nothing from an earlier sample came in between).
   template <class Emit>
@@ -150,7 +172,8 @@ class BusFaults {
     std::uint64_t bit = 0;
     Direction direction = Direction::kTx;
     std::size_t message = 0;  // index in its direction's messages
-    bool whole_bus = false;   // bus_off: every message, both directions (one Fault per direction)
+    bool whole_bus = false;   // bus_off: every message, both directions (one Fault per direction); error_frames
+    bool error_edges = false, was_on = false;  // bus_off on a bus with error frames: its edges reported
     std::string name;         // the message ("bus"), for the report
     std::string kind;
     // drop

@@ -472,7 +472,8 @@ std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::can::Tran
   const auto with_faults = [&](auto plant) -> std::unique_ptr<ExternalDriver> {
     std::vector<std::string> errors;
     BusFaults faults;
-    if (!BusFaults::resolve(sc.faults, plant->wire().binding(), sc.solver.step_s, sc.solver.ecu_ratio, faults, errors)) {
+    if (!BusFaults::resolve(sc.faults, plant->wire().binding(), sc.solver.step_s, sc.solver.ecu_ratio,
+                            bus.sends_error_frames(), faults, errors)) {
       for (const std::string& e : errors) error += (error.empty() ? "" : "\n") + e;
       return nullptr;
     }

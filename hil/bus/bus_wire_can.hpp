@@ -41,6 +41,7 @@
 #include "io/can/asc_log.hpp"
 #include "io/can/candump_log.hpp"
 #include "io/can/codec.hpp"
+#include "io/can/socketcan.hpp"
 #include "io/can/transport.hpp"
 #include "io/handoff_buffer.hpp"
 #include "io/output_dir.hpp"
@@ -162,7 +163,10 @@ class CanWire {
       log_frames(std::span<const io::can::Frame>(&out, 1), false);
     };
     bool intact = true;
-    if (!faults_.empty()) {  // frames held from earlier samples that are due now go first
+    if (!faults_.empty()) {  // error frames, then frames held from earlier samples that are due now
+      faults_.error_frames(fault_mask_, [&](io::can::ErrorFrame kind) {
+        if (bus_.send_error(kind)) log_error_frame(kind);
+      });
       faults_.release(BusFaults::Direction::kTx, step, emit);
       faults_.release_held(BusFaults::Direction::kTx, fault_mask_, emit);
     }
@@ -501,6 +505,18 @@ class CanWire {
       received_mask_ |= b.mask_bit;
     }
     return true;
+  }
+
+  // An error frame the plant put on the bus, in bus.log as candump -L writes one (bus.asc
+  // leaves them out: its error-frame lines name a channel's own errors).
+  void log_error_frame(io::can::ErrorFrame kind) {
+    std::uint32_t id = 0;
+    std::array<std::uint8_t, 8> data{};
+    io::can::error_frame_bits(kind, id, data);
+    line_.clear();
+    io::can::append_candump_error_line(line_, wall_time_s(), log_interface_, id, data);
+    log_buf_.append(line_);
+    if (!background_ && log_buf_.wants_writer()) background_flush();
   }
 
   static double wall_time_s() {

@@ -6,24 +6,51 @@
 
 namespace ehpt::io::can {
 
-void append_candump_line(std::string& out, double time_s, std::string_view interface_name, const Frame& f) {
-  // seconds and microseconds as integers: the same text for the same time on every machine
+namespace {
+
+// "(seconds.micros) interface": seconds and microseconds as integers, the same text for the
+// same time on every machine
+void append_head(std::string& out, double time_s, std::string_view interface_name) {
   const double t = std::isfinite(time_s) && time_s >= 0.0 ? time_s : 0.0;
   auto us = static_cast<long long>(std::llround(t * 1e6));
   char head[48];
   const int n = std::snprintf(head, sizeof head, "(%lld.%06lld) ", us / 1000000, us % 1000000);
   out.append(head, static_cast<std::size_t>(n));
   out.append(interface_name);
-  char body[32];
-  int m = f.extended ? std::snprintf(body, sizeof body, " %08X#", static_cast<unsigned>(f.id & kMaxExtendedId))
-                     : std::snprintf(body, sizeof body, " %03X#", static_cast<unsigned>(f.id & kMaxStandardId));
+}
+
+// " ID#" (id_text already formatted), then the bytes in hex, then a newline
+void append_body(std::string& out, const char* id_text, const std::uint8_t* data, int len) {
   static const char kHex[] = "0123456789ABCDEF";
-  for (int i = 0; i < f.len && i < 8; ++i) {
-    body[m++] = kHex[f.data[static_cast<std::size_t>(i)] >> 4];
-    body[m++] = kHex[f.data[static_cast<std::size_t>(i)] & 0x0F];
+  char body[32];
+  int m = std::snprintf(body, sizeof body, " %s#", id_text);
+  for (int i = 0; i < len && i < 8; ++i) {
+    body[m++] = kHex[data[i] >> 4];
+    body[m++] = kHex[data[i] & 0x0F];
   }
   body[m++] = '\n';
   out.append(body, static_cast<std::size_t>(m));
+}
+
+}  // namespace
+
+void append_candump_line(std::string& out, double time_s, std::string_view interface_name, const Frame& f) {
+  append_head(out, time_s, interface_name);
+  char id[12];
+  if (f.extended) {
+    std::snprintf(id, sizeof id, "%08X", static_cast<unsigned>(f.id & kMaxExtendedId));
+  } else {
+    std::snprintf(id, sizeof id, "%03X", static_cast<unsigned>(f.id & kMaxStandardId));
+  }
+  append_body(out, id, f.data.data(), f.len);
+}
+
+void append_candump_error_line(std::string& out, double time_s, std::string_view interface_name,
+                               std::uint32_t can_id_with_flag, const std::array<std::uint8_t, 8>& data) {
+  append_head(out, time_s, interface_name);
+  char id[12];
+  std::snprintf(id, sizeof id, "%08X", static_cast<unsigned>(can_id_with_flag));
+  append_body(out, id, data.data(), 8);
 }
 
 bool parse_candump_line(std::string_view line, CandumpLine& out, const char*& why) {

@@ -3,6 +3,7 @@
 // candump -L log lines, "(1700000000.123456) vcan0 123#1122334455667788": what can-utils'
 // candump -L writes and canplayer reads, and what python-can's CanutilsLogReader reads. Pure.
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -21,6 +22,10 @@ constexpr int hex_digit_value(char c) {
 
 // Appends one line (with '\n'). Allocates only if `out` lacks the capacity (reserve it).
 void append_candump_line(std::string& out, double time_s, std::string_view interface_name, const Frame& f);
+// An error frame in the same format (as candump -L writes one): the id with CAN_ERR_FLAG
+// (0x20000000) and the error class bits, 8 hex digits, then its 8 data bytes.
+void append_candump_error_line(std::string& out, double time_s, std::string_view interface_name,
+                               std::uint32_t can_id_with_flag, const std::array<std::uint8_t, 8>& data);
 
 struct CandumpLine {
   double time_s = 0.0;

@@ -10,6 +10,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <array>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -101,6 +102,29 @@ class SocketCanTransport final : public Transport {
   }
 
   bool has_peer() const override { return true; }
+  bool sends_error_frames() const override { return true; }
+  // Run phase: no allocation. The frame linux/can/error.h describes (CAN_ERR_FLAG in the id,
+  // CAN_ERR_DLC bytes): every socket with an error filter on the interface receives it; on
+  // vcan that is the ECU under test, as a controller would report the bus's errors to it.
+  bool send_error(ErrorFrame kind) override {
+    struct can_frame out {};
+    out.len = CAN_ERR_DLC;
+    std::array<std::uint8_t, 8> data{};
+    std::uint32_t id = 0;
+    error_frame_bits(kind, id, data);
+    out.can_id = id;
+    std::memcpy(out.data, data.data(), data.size());
+    ssize_t written = -1;
+    do {
+      written = ::write(fd_, &out, sizeof out);
+    } while (written < 0 && errno == EINTR);
+    if (written != static_cast<ssize_t>(sizeof out)) {
+      ++counters_.send_dropped;
+      return false;
+    }
+    ++counters_.error_frames_sent;
+    return true;
+  }
   const TransportCounters& counters() const override { return counters_; }
   std::string describe() const override { return description_; }
 
@@ -113,6 +137,20 @@ class SocketCanTransport final : public Transport {
 std::string errno_text(int error_number) { return std::strerror(error_number); }
 
 }  // namespace
+
+void error_frame_bits(ErrorFrame kind, std::uint32_t& can_id, std::array<std::uint8_t, 8>& data) {
+  static_assert(CAN_ERR_DLC == 8);
+  data.fill(0);
+  switch (kind) {
+    case ErrorFrame::kBusError:
+      can_id = CAN_ERR_FLAG | CAN_ERR_PROT | CAN_ERR_BUSERROR;
+      data[2] = CAN_ERR_PROT_FORM;
+      return;
+    case ErrorFrame::kBusOff: can_id = CAN_ERR_FLAG | CAN_ERR_BUSOFF; return;
+    case ErrorFrame::kRestarted: can_id = CAN_ERR_FLAG | CAN_ERR_RESTARTED; return;
+  }
+  can_id = CAN_ERR_FLAG;
+}
 
 std::unique_ptr<Transport> open_socketcan(const std::string& interface_name,
                                           std::span<const std::uint32_t> rx_ids,

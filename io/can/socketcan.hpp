@@ -18,6 +18,7 @@
 // Start-up: open_socketcan() may allocate and fails with one clear line. Run phase: send(),
 // receive(), wait() use no heap, throw nothing and print nothing.
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -35,6 +36,10 @@ namespace ehpt::io::can {
 // The name must be 1..15 characters (IFNAMSIZ - 1) without '/'; every rx id must be <= 0x7FF,
 // or an extended one (<= 0x1FFFFFFF) with kExtendedIdFlag set.
 // An empty rx_ids receives no data frames (error frames are still counted).
+// The frame of an error (linux/can/error.h): its id with CAN_ERR_FLAG and class bits, and its
+// CAN_ERR_DLC data bytes. Pure: what send_error writes, and what bus.log records of it.
+void error_frame_bits(ErrorFrame kind, std::uint32_t& can_id, std::array<std::uint8_t, 8>& data);
+
 std::unique_ptr<Transport> open_socketcan(const std::string& interface_name,
                                           std::span<const std::uint32_t> rx_ids,
                                           std::string& error);

@@ -25,7 +25,13 @@ struct TransportCounters {
   std::int64_t peers_lost = 0;      // socketcand: clients that went away
   std::int64_t peers_refused = 0;   // socketcand: connections refused (every slot taken)
   std::int64_t peers_evicted = 0;   // socketcand: listeners that never sent, dropped for a new client
+  std::int64_t error_frames_sent = 0;  // CAN error frames put on the bus (bus faults, SocketCAN)
 };
+
+// A CAN error frame as SocketCAN reports one (linux/can/error.h), put on a virtual bus by the
+// plant's bus faults for the ECU to see: a protocol error (a form error, as a disturbed bit
+// gives), the controller going bus-off, and its restart.
+enum class ErrorFrame { kBusError, kBusOff, kRestarted };
 
 class Transport {
  public:
@@ -41,6 +47,11 @@ class Transport {
   virtual bool has_peer() const = 0;
   virtual const TransportCounters& counters() const = 0;
   virtual std::string describe() const = 0;  // e.g. "socketcan:vcan0"
+  // Whether send_error can put error frames on this bus (SocketCAN can; socketcand's protocol
+  // has no error frames).
+  virtual bool sends_error_frames() const { return false; }
+  // Puts one error frame on the bus; false if it cannot (not counted as a data frame).
+  virtual bool send_error(ErrorFrame) { return false; }
 };
 
 }  // namespace ehpt::io::can

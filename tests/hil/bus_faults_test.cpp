@@ -10,7 +10,9 @@
 
 #include "hil/bus/bus_binding.hpp"
 #include "io/can/dbc.hpp"
+#include "io/can/candump_log.hpp"
 #include "io/can/e2e.hpp"
+#include "io/can/socketcan.hpp"
 #include "test_plants.hpp"
 
 namespace ehpt::hil {
@@ -76,7 +78,7 @@ std::uint64_t counter_of(const BoundMessage& m, const io::can::Frame& f) {
 BusFaults resolved(const std::vector<FaultSpec>& faults, const Binding& b) {
   BusFaults out;
   std::vector<std::string> errors;
-  EXPECT_TRUE(BusFaults::resolve(faults, b, kStep, kRatio, out, errors)) << (errors.empty() ? "" : errors[0]);
+  EXPECT_TRUE(BusFaults::resolve(faults, b, kStep, kRatio, false, out, errors)) << (errors.empty() ? "" : errors[0]);
   return out;
 }
 
@@ -288,12 +290,49 @@ TEST(BusFaults, E2eCrcAndCounterAsTheReceiverJudgesThem) {
   }
 }
 
+// On a bus that carries error frames (SocketCAN): error_frames one per sample while it acts,
+// bus_off its controller's bus-off where it starts and the restart where it ends; elsewhere
+// bus_off is silence alone. As candump -L records them.
+TEST(BusFaults, ErrorFramesAndBusOffEdgesOnABusThatCarriesThem) {
+  const Binding b = psd_binding();
+  FaultSpec e = bus_fault(FaultEffect::kErrorFrames, "bus");
+  FaultSpec off = bus_fault(FaultEffect::kBusOff, "bus");
+  BusFaults bf;
+  std::vector<std::string> errors;
+  ASSERT_TRUE(BusFaults::resolve({e, off}, b, kStep, kRatio, true, bf, errors)) << (errors.empty() ? "" : errors[0]);
+  std::vector<io::can::ErrorFrame> sent;
+  const auto send = [&](io::can::ErrorFrame k) { sent.push_back(k); };
+  for (std::uint64_t mask : {0u, 1u, 1u, 0u, 2u, 2u, 2u, 0u, 0u}) bf.error_frames(mask, send);
+  using io::can::ErrorFrame;
+  EXPECT_EQ(sent, (std::vector<ErrorFrame>{ErrorFrame::kBusError, ErrorFrame::kBusError, ErrorFrame::kBusOff,
+                                           ErrorFrame::kRestarted}));
+  EXPECT_EQ(bf.frames_of(0), 2);
+  // without error frames on the bus: bus_off is silence, no edge reported
+  BusFaults quiet;
+  ASSERT_TRUE(BusFaults::resolve({off}, b, kStep, kRatio, false, quiet, errors));
+  sent.clear();
+  for (std::uint64_t mask : {1u, 1u, 0u}) quiet.error_frames(mask, send);
+  EXPECT_TRUE(sent.empty());
+  // the frames as linux/can/error.h has them, in candump -L's text
+  std::string log;
+  for (ErrorFrame k : {ErrorFrame::kBusError, ErrorFrame::kBusOff, ErrorFrame::kRestarted}) {
+    std::uint32_t id = 0;
+    std::array<std::uint8_t, 8> data{};
+    io::can::error_frame_bits(k, id, data);
+    io::can::append_candump_error_line(log, 1.5, "vcan0", id, data);
+  }
+  EXPECT_EQ(log,
+            "(1.500000) vcan0 20000088#0000020000000000\n"
+            "(1.500000) vcan0 20000040#0000000000000000\n"
+            "(1.500000) vcan0 20000100#0000000000000000\n");
+}
+
 TEST(BusFaults, WhatTheBindingCannotTakeIsALoadErrorWithItsLine) {
   const Binding psd = psd_binding(), vcu = vcu_binding();
   const auto error_of = [&](const FaultSpec& f, const Binding& b) {
     BusFaults out;
     std::vector<std::string> errors;
-    EXPECT_FALSE(BusFaults::resolve({f}, b, kStep, kRatio, out, errors));
+    EXPECT_FALSE(BusFaults::resolve({f}, b, kStep, kRatio, false, out, errors));
     return errors.empty() ? std::string() : errors[0];
   };
   const auto has = [](const std::string& e, const std::string& what) {
@@ -307,11 +346,11 @@ TEST(BusFaults, WhatTheBindingCannotTakeIsALoadErrorWithItsLine) {
   has(error_of(c, psd), "byte = 8 is outside the frame");
   has(error_of(bus_fault(FaultEffect::kBadCrc, "PsdCommand1"), psd), "has no E2E protection");
   has(error_of(bus_fault(FaultEffect::kCounterFreeze, "VCU_EngineCmd"), vcu), "carries no counter");
-  has(error_of(bus_fault(FaultEffect::kErrorFrames, "bus"), psd), "CAN error frames are not sent");
+  has(error_of(bus_fault(FaultEffect::kErrorFrames, "bus"), psd), "CAN error frames need a bus that carries them");
   // and what it can: a counter fault on an E2E message without a rolling counter
   BusFaults ok;
   std::vector<std::string> errors;
-  EXPECT_TRUE(BusFaults::resolve({bus_fault(FaultEffect::kCounterJump, "VCU_TorqueCmd")}, vcu, kStep, kRatio, ok, errors));
+  EXPECT_TRUE(BusFaults::resolve({bus_fault(FaultEffect::kCounterJump, "VCU_TorqueCmd")}, vcu, kStep, kRatio, false, ok, errors));
   EXPECT_TRUE(errors.empty());
 }
 

@@ -658,6 +658,21 @@ class Vcan(BusTest):
         # and the VCU's two engine frames per sample
         ext = [line for line in (vm_run / "bus.log").read_text().splitlines() if line.split()[2].find("#") == 8]
         self.assertGreaterEqual(len(ext), 3 * samples, "extended-id frames in bus.log")
+        # bus faults that put error frames on vcan0 (linux/can/error.h): 5 protocol errors (one
+        # per sample of 1.00-1.05 s), a bus-off at 2.0 s and its restart at 2.1 s, as a listener
+        # on the interface hears them and as bus.log has them; the plant does not hear its own
+        errors = (out / "error_frames.txt").read_text().splitlines()
+        self.assertEqual(errors, ["20000088 0000020000000000"] * 5 + ["20000040 0000000000000000",
+                                                                      "20000100 0000000000000000"])
+        err_run = out / "with_error_frames"
+        summary = json.loads((err_run / "summary.json").read_text())
+        bus = summary["bus"]
+        self.assertEqual([(f["kind"], f["frames"]) for f in bus["faults"]], [("error_frames", 5), ("bus_off", 40)])  # 10 samples x EvSensors1..3, PlantStatus
+        self.assertEqual(bus["error_frames"], 0)  # received: none (its own are not looped back to it)
+        self.assertEqual(summary["status"], "ok", summary.get("degraded"))
+        logged = [line.split()[2] for line in (err_run / "bus.log").read_text().splitlines() if line.split()[2].startswith("2000")]
+        self.assertEqual(logged, ["20000088#0000020000000000"] * 5 + ["20000040#0000000000000000",
+                                                                      "20000100#0000000000000000"])
 
 
 class BadInput(BusTest):

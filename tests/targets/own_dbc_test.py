@@ -141,9 +141,9 @@ class OwnDbc(unittest.TestCase):
                 p.kill()
                 p.wait()
 
-    def session(self, out, plant_extra, vcu_extra=(), sets=(), forger=None):
+    def session(self, out, plant_extra, vcu_extra=(), sets=(), forger=None, scenario=SCENARIO):
         port = free_port()
-        args = [EHPT, "plant", SCENARIO, "--bus", "socketcand:127.0.0.1:%d" % port, "--bus-map", str(BINDING),
+        args = [EHPT, "plant", str(scenario), "--bus", "socketcand:127.0.0.1:%d" % port, "--bus-map", str(BINDING),
                 "--out", str(out), "--quiet"] + list(plant_extra)
         for s in sets:
             args += ["--set", s]
@@ -238,6 +238,27 @@ class OwnDbc(unittest.TestCase):
         self.assertEqual(bus["rejected"]["stale"], 0)  # no echo: nothing can be stale by its step
         print("\ncyclic VCU, wall clock 5 s: %d commands, %d stale samples, %d timeouts"
               % (bus["commands_applied"], bus["stale_samples"], bus["timeouts"]), file=sys.stderr)
+
+    def test_a_bus_fault_spoils_the_e2e_crc_and_the_plant_counts_each_frame_as_bad_crc(self):
+        """bad_crc on the VCU's torque command for 1 s (wall clock, the cyclic VCU): every frame
+        it spoiled is refused as bad_crc and nothing else is; the message times out into the
+        safe state, counted under the bus fault (the session is not degraded by it)."""
+        test = self.tmp / "bad_crc.toml"
+        test.write_text('scenario = "psecu2_nedc"\n[solver]\nduration_s = 4.0\n'
+                        '[[fault]]\nkind = "bad_crc"\ntarget = "VCU_TorqueCmd"\nat_s = 2.0\nuntil_s = 3.0\n')
+        out = self.tmp / "bad_crc"
+        rc, summary, _ = self.session(out, [], vcu_extra=["--cyclic"], scenario=test)
+        bus = summary["bus"]
+        self.assertIn(rc, (0, 4), pathlib.Path(self.plant_err).read_text())
+        fault = bus["faults"][0]
+        self.assertEqual((fault["kind"], fault["message"], fault["direction"]), ("bad_crc", "VCU_TorqueCmd", "ecu_to_plant"))
+        self.assertGreater(fault["frames"], 50)  # ~100 at 10 ms (the VCU's own clock)
+        self.assertEqual(bus["messages_received"]["VCU_TorqueCmd"]["bad_crc"], fault["frames"])
+        self.assertEqual(bus["rejected"]["bad_crc"], fault["frames"])
+        self.assertGreaterEqual(bus["timeouts"], 1)
+        self.assertEqual(bus["timeouts_under_bus_faults"], bus["timeouts"])
+        print("\nbad_crc 1 s: %d frames spoiled and refused, %d timeouts, %.3f s safe state"
+              % (fault["frames"], bus["timeouts"], bus["safe_state_time_s"]), file=sys.stderr)
 
 
 if __name__ == "__main__":
