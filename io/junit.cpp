@@ -28,11 +28,12 @@ std::string xml_escape(const std::string& text) {
 }
 
 std::string junit_xml(const std::string& suite, const std::vector<JunitCase>& cases) {
-  std::size_t failures = 0, errors = 0;
+  std::size_t failures = 0, errors = 0, skipped = 0;
   double total_s = 0.0;
   for (const JunitCase& c : cases) {
     failures += c.result == JunitCase::Result::kFailed ? 1 : 0;
     errors += c.result == JunitCase::Result::kError ? 1 : 0;
+    skipped += c.result == JunitCase::Result::kSkipped ? 1 : 0;
     total_s += c.time_s;
   }
   const auto seconds = [](double s) {
@@ -44,7 +45,7 @@ std::string junit_xml(const std::string& suite, const std::vector<JunitCase>& ca
   x += "<testsuites tests=\"" + std::to_string(cases.size()) + "\" failures=\"" + std::to_string(failures) +
        "\" errors=\"" + std::to_string(errors) + "\" time=\"" + seconds(total_s) + "\">\n";
   x += "  <testsuite name=\"" + xml_escape(suite) + "\" tests=\"" + std::to_string(cases.size()) + "\" failures=\"" +
-       std::to_string(failures) + "\" errors=\"" + std::to_string(errors) + "\" skipped=\"0\" time=\"" +
+       std::to_string(failures) + "\" errors=\"" + std::to_string(errors) + "\" skipped=\"" + std::to_string(skipped) + "\" time=\"" +
        seconds(total_s) + "\">\n";
   for (const JunitCase& c : cases) {
     x += "    <testcase name=\"" + xml_escape(c.name) + "\" classname=\"" + xml_escape(c.classname) + "\" time=\"" +
@@ -54,7 +55,9 @@ std::string junit_xml(const std::string& suite, const std::vector<JunitCase>& ca
       continue;
     }
     x += ">\n";
-    if (c.result != JunitCase::Result::kPassed) {
+    if (c.result == JunitCase::Result::kSkipped) {
+      x += "      <skipped message=\"" + xml_escape(c.message) + "\"/>\n";
+    } else if (c.result != JunitCase::Result::kPassed) {
       const char* tag = c.result == JunitCase::Result::kFailed ? "failure" : "error";
       x += std::string("      <") + tag + " message=\"" + xml_escape(c.message) + "\" type=\"" +
            (c.result == JunitCase::Result::kFailed ? "expectation" : "run") + "\">" + xml_escape(c.details) + "</" +

@@ -2,7 +2,8 @@
 #pragma once
 // JUnit XML (the schema CI servers read: Jenkins, GitLab, GitHub's test reporters, Debian's
 // python3-junitparser): one <testsuite> of <testcase>s, each passed, failed (<failure>) or in
-// error (<error>). A pure function of its input.
+// error (<error>), or skipped (<skipped>: it could not run here, and says why). A pure
+// function of its input.
 
 #include <string>
 #include <vector>
@@ -10,12 +11,12 @@
 namespace ehpt::io {
 
 struct JunitCase {
-  enum class Result { kPassed, kFailed, kError };
+  enum class Result { kPassed, kFailed, kError, kSkipped };
   std::string name;       // the test's name
   std::string classname;  // its group (the suite or folder)
   double time_s = 0.0;
   Result result = Result::kPassed;
-  std::string message;    // one line: the first failed expectation, or the error
+  std::string message;    // one line: the first failed expectation, the error, or why it was skipped
   std::string details;    // the element's text: every expectation, the tail of a log
 };
 

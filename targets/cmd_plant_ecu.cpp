@@ -30,6 +30,7 @@ namespace {
 
 const char* kPlantHelp =
     "usage: ehpt plant SCENARIO --bus SPEC [--lockstep] [--out DIR] [--set key=value ...]\n"
+    "                  [--fault SPEC ...]\n"
     "                  [--command-timeout-s T] [--lockstep-wait-s W] [--ecu-wait-s S]\n"
     "                  [--allow-degraded] [--bus-log-format candump|asc] [--bus-map FILE]\n"
     "                  [--realtime [--period T] [--cpu N] [--priority P]] [--quiet]\n"
@@ -60,7 +61,8 @@ const char* kPlantHelp =
     "  --allow-degraded exit 0 for a degraded session (its status stays \"degraded\")\n"
     "  --bus-log-format F  asc: bus.asc too (Vector ASC: CANoe, CANalyzer, python-can's\n"
     "                   ASCReader), each frame with its direction; default candump (bus.log only)\n"
-    "  --out, --set, --quiet  as for 'ehpt run'\n"
+    "  --out, --set, --fault, --quiet  as for 'ehpt run' (a --fault is kept in inputs.log\n"
+    "                   for 'ehpt replay'); bus faults act on the frames (docs/testing.md)\n"
     "A fault holds the run (reported in PlantStatus) and ends it with exit 3. A session that\n"
     "ran without its ECU is \"degraded\" (summary.json status and degraded, the last line,\n"
     "exit 4): no command at all, commands that timed out, lockstep waits that ran out, error\n"
@@ -94,7 +96,7 @@ bool parse_positive(const std::string& option, const std::string& text, double& 
 // The options 'ehpt plant' and 'ehpt ecu' share, and theirs.
 struct BusArgs {
   std::string scenario, out_dir, bus, lcm_prefix = "EHPT_", bus_map;
-  std::vector<std::string> sets;
+  std::vector<std::string> sets, faults;  // faults: plant only
   bool lockstep = false, quiet = false, allow_degraded = false, asc_log = false;
   double command_timeout_s = 0.0, lockstep_wait_s = 1.0, ecu_wait_s = 60.0, idle_timeout_s = 10.0, max_samples = 0.0;
   // --bus, checked: an LCM URL, or a CAN transport
@@ -114,7 +116,7 @@ int parse_bus_args(const std::vector<std::string>& args, bool plant, const char*
       }
     }
     const std::string& o = args[i];
-    const bool takes_value = o == "--bus" || o == "--set" || o == "--lcm-prefix" || (plant && (o == "--out" || o == "--command-timeout-s" || o == "--bus-log-format" || o == "--bus-map" ||
+    const bool takes_value = o == "--bus" || o == "--set" || o == "--lcm-prefix" || (plant && (o == "--out" || o == "--fault" || o == "--command-timeout-s" || o == "--bus-log-format" || o == "--bus-map" ||
                                                                         o == "--lockstep-wait-s" || o == "--ecu-wait-s")) ||
                              (!plant && (o == "--idle-timeout-s" || o == "--max-samples"));
     if (takes_value && i + 1 >= args.size()) {
@@ -125,6 +127,8 @@ int parse_bus_args(const std::vector<std::string>& args, bool plant, const char*
       a.bus = args[++i];
     } else if (o == "--set") {
       a.sets.push_back(args[++i]);
+    } else if (plant && o == "--fault") {
+      a.faults.push_back(args[++i]);
     } else if (o == "--lcm-prefix") {
       a.lcm_prefix = args[++i];
       if (a.lcm_prefix.size() > 100 || a.lcm_prefix.find_first_of(" \t\n") != std::string::npos) {
@@ -239,7 +243,7 @@ int cmd_plant(const std::vector<std::string>& args) {
     return 1;
   }
   ehpt::hil::Scenario sc;
-  if (const int rc = load(a.scenario, a.sets, sc); rc != 0) return rc;
+  if (const int rc = load(a.scenario, a.sets, sc, a.faults); rc != 0) return rc;
   if (const int rc = check_realtime(a.rt, sc); rc != 0) return rc;
   if (!a.quiet) {
     for (const auto& w : sc.warnings) std::cerr << "warning: " << w << "\n";
@@ -256,6 +260,7 @@ int cmd_plant(const std::vector<std::string>& args) {
   std::error_code path_ec;
   bo.scenario_path = fs::absolute(sc.path, path_ec).string();
   bo.overrides = a.sets;
+  bo.faults = a.faults;
   std::string error, why;
   if (!ehpt::hil::can_run_on_bus(sc, why)) {
     std::cerr << "error: " << why << "\n";

@@ -128,10 +128,10 @@ int cmd_replay(const std::vector<std::string>& args) {
   }
   std::vector<std::string> sets = log.overrides;
   ehpt::hil::Scenario sc;
-  if (const int rc = load(log.scenario_path, sets, sc); rc != 0) return rc;
+  if (const int rc = load(log.scenario_path, sets, sc, log.faults); rc != 0) return rc;
   if (recorded_steps < sc.solver.steps) {  // it ran this far: so does the replay
     sets.push_back("solver.duration_s=" + ehpt::io::number_text(static_cast<double>(recorded_steps) * sc.solver.step_s));
-    if (const int rc = load(log.scenario_path, sets, sc); rc != 0) return rc;
+    if (const int rc = load(log.scenario_path, sets, sc, log.faults); rc != 0) return rc;
   }
   std::string why;
   if (!ehpt::hil::can_run_on_bus(sc, why)) {  // a rig: no bus session can have been recorded on it

@@ -3,8 +3,11 @@
 // and optionally its figures.
 #include <unistd.h>
 
+#include <filesystem>
 #include <iostream>
+#include <memory>
 
+#include "hil/bus/in_process_bus.hpp"
 #include "hil/run/batch.hpp"
 #include "targets/cli.hpp"
 
@@ -41,7 +44,8 @@ const char* kRunHelp =
     "                   line, --fault \"kind=stuck target=batSOC at_s=300\" (docs/testing.md;\n"
     "                   timeseries.csv gets a faults_active column). A scenario with [[expect]]\n"
     "                   tables prints its verdict; an expectation that fails exits 5. Bus\n"
-    "                   faults (on frames: drop, delay, ...) need a bus: 'ehpt test --bus'\n"
+    "                   faults (on frames: drop, delay, ...) put the built-in ECU on an\n"
+    "                   in-process CAN bus (lockstep; bus.log, inputs.log, \"bus\" in summary.json)\n"
     "  --plot           draw the figures into DIR (as 'ehpt plot DIR'; needs timeseries.csv,\n"
     "                   refused with output.timeseries=false); a failed plot keeps the run\n"
     "                   and exits 1\n"
@@ -135,6 +139,22 @@ int cmd_run(const std::vector<std::string>& args) {
       if (expect_figures) ok = run_expect_figures(dir, quiet) && ok;
       return ok;
     };
+  }
+  // bus faults act on frames: the built-in ECU then runs over an in-process CAN bus
+  std::unique_ptr<ehpt::hil::ExternalDriver> bus;
+  if (ehpt::hil::has_bus_faults(sc)) {
+    ehpt::hil::BusPlantOptions bo;
+    std::error_code path_ec;
+    bo.scenario_path = std::filesystem::absolute(sc.path, path_ec).string();
+    bo.overrides = sets;
+    bo.faults = faults;
+    std::string error;
+    bus = ehpt::hil::make_in_process_bus(sc, bo, error);
+    if (!bus) {
+      std::cerr << "error: " << error << "\nnothing was run.\n";
+      return 2;
+    }
+    opt.driver = bus.get();
   }
   const ehpt::hil::BatchResult r = ehpt::hil::run_batch(sc, opt, std::cerr);
   if (!quiet) {

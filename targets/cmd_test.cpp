@@ -20,6 +20,7 @@
 #include "hil/bus/bus_binding.hpp"
 #include "hil/bus/bus_faults.hpp"
 #include "hil/bus/bus_plant.hpp"
+#include "hil/bus/in_process_bus.hpp"
 #include "hil/config/scenario.hpp"
 #include "hil/run/batch.hpp"
 #include "io/json_value.hpp"
@@ -58,9 +59,12 @@ const char* kTestHelp =
     "                   port + k, default 7667; prefix EHPT_S<k>_). E.g.\n"
     "                   --bus socketcand:127.0.0.1:29600 --ecu-cmd ehpt ecu {test} --bus {bus}\n"
     "                   An ECU that exits non-zero or crashes is a test error (its status and\n"
-    "                   the tail of its log in the report). Bus faults (drop, delay, corrupt,\n"
-    "                   counter_jump, bus_off, ... on a message's frames) need a socketcand\n"
-    "                   bus; without one, or over LCM, they are refused (exit 2)\n"
+    "                   the tail of its log in the report)\n"
+    "\n"
+    "Bus faults (drop, delay, corrupt, counter_jump, bus_off, ... on a message's frames) act on\n"
+    "CAN frames: without --bus the built-in ECU then runs over an in-process CAN bus (the same\n"
+    "session as over socketcand with 'ehpt ecu', bit for bit); over LCM, which carries no CAN\n"
+    "frames, such a test is skipped (listed with its reason, <skipped> in the JUnit file).\n"
     "\n"
     "Every test file is checked before anything runs: a problem is 'file:line: field = value:\n"
     "expectation' (exit 2). A test with [test] expect_fail = true is written to fail: it\n"
@@ -73,7 +77,7 @@ struct TestCase {
   std::string group; // the folder or suite it came from
   std::string out_dir, log_path, ecu_log_path;
   // after the run
-  enum class State { kPending, kPassed, kFailed, kError } state = State::kPending;
+  enum class State { kPending, kPassed, kFailed, kError, kSkipped } state = State::kPending;
   std::string first_failure;  // or the error
   std::string details;        // every expectation's line
   double wall_s = 0.0;
@@ -366,22 +370,23 @@ int cmd_test(const std::vector<std::string>& args) {
       errors.push_back(t.path + ": no [[expect]] table: a test states what must hold (docs/testing.md)");
     }
     t.expect_fail = sc.test.expect_fail;
-    // bus faults act on CAN frames: a test with one needs a CAN bus (socketcand) to act on
-    if (!bus.enabled) {
-      if (const std::string why = hil::bus_faults_refused(sc, nullptr); !why.empty()) errors.push_back(why);
-    } else if (bus.lcm) {
-      for (const hil::FaultSpec& f : sc.faults) {
-        if (f.side != hil::FaultSide::kBus) continue;
-        errors.push_back(f.where + ": kind = \"" + hil::fault_effect_name(f.effect) + "\" acts on CAN frames, and --bus " +
-                         bus.spec + " carries LCM messages: run this test over socketcand (--bus socketcand:HOST:PORT)");
-        break;
-      }
-    } else if (hil::can_run_on_bus(sc, reason)) {
+    // bus faults act on CAN frames: in-process (the built-in ECU over an in-process bus) or
+    // over socketcand; LCM carries none
+    if (!hil::has_bus_faults(sc)) continue;
+    if (bus.lcm) {
+      const auto f = std::find_if(sc.faults.begin(), sc.faults.end(),
+                                  [](const hil::FaultSpec& x) { return x.side == hil::FaultSide::kBus; });
+      t.state = TestCase::State::kSkipped;
+      t.first_failure = "skipped: " + f->where + ": kind = \"" + hil::fault_effect_name(f->effect) +
+                        "\" acts on CAN frames, and LCM carries none (run it without --bus, or over socketcand)";
+    } else if (!hil::can_run_on_bus(sc, reason)) {
+      errors.push_back(t.path + ": bus faults need a plant with bus messages: " + reason);
+    } else {
       // the plant runs on ehpt's own contract: its messages, checked now rather than when
       // the test's turn comes
       std::optional<hil::Binding> binding = hil::default_binding(hil::bus_family(sc), sc.ecu_timing.period_s, e);
       hil::BusFaults faults;
-      // (socketcand: no error frames)
+      // (in-process and socketcand: no error frames)
       if (binding) hil::BusFaults::resolve(sc.faults, *binding, sc.solver.step_s, sc.solver.ecu_ratio, false, faults, e);
       errors.insert(errors.end(), e.begin(), e.end());
     }
@@ -433,6 +438,12 @@ int cmd_test(const std::vector<std::string>& args) {
   while (done < tests.size()) {
     while (g_stop.load() == 0 && running.size() < static_cast<std::size_t>(jobs) && next < tests.size()) {
       TestCase& t = tests[next];
+      if (t.state == TestCase::State::kSkipped) {  // decided at the check
+        ++next;
+        ++done;
+        if (!quiet) std::cerr << "[" << done << "/" << tests.size() << "] skipped " << t.name << "\n";
+        continue;
+      }
       Running r;
       r.test = next++;
       r.slot = static_cast<std::size_t>(std::find(slot_busy.begin(), slot_busy.end(), false) - slot_busy.begin());
@@ -533,7 +544,7 @@ int cmd_test(const std::vector<std::string>& args) {
   }
 
   // the table: test, verdict, first failed expectation with its time and value
-  std::size_t passed = 0, failed = 0, broken = 0, not_run = 0;
+  std::size_t passed = 0, failed = 0, broken = 0, not_run = 0, skipped = 0;
   std::size_t width = 4;
   for (const TestCase& t : tests) width = std::max(width, t.name.size());
   std::string table = "test" + std::string(width - 4 + 2, ' ') + "verdict  first failure\n";
@@ -564,6 +575,12 @@ int cmd_test(const std::vector<std::string>& args) {
         c.message = t.first_failure;
         c.details = t.details;
         break;
+      case TestCase::State::kSkipped:
+        ++skipped;
+        word = "skipped";
+        c.result = io::JunitCase::Result::kSkipped;
+        c.message = t.first_failure;
+        break;
       case TestCase::State::kPending:
         ++not_run;
         word = "not run";
@@ -578,6 +595,7 @@ int cmd_test(const std::vector<std::string>& args) {
   }
   table += std::to_string(tests.size()) + " test" + (tests.size() == 1 ? "" : "s") + ": " + std::to_string(passed) +
            " passed, " + std::to_string(failed) + " failed, " + std::to_string(broken) + " errors" +
+           (skipped > 0 ? ", " + std::to_string(skipped) + " skipped" : std::string()) +
            (not_run > 0 ? ", " + std::to_string(not_run) + " not run" : std::string()) + "; runs in " + out_dir + "\n";
   const bool printed = out(table);
   if (!junit.empty()) {

@@ -76,6 +76,12 @@ class CanEcuWire {
     return saturated;
   }
 
+  std::int64_t incomplete() const { return incomplete_; }
+  std::int64_t rejected() const {
+    const io::can::RxStats& rx = filter_.stats();
+    return rx.unknown_id + rx.wrong_length + rx.bad_counter + rx.out_of_range;
+  }
+
   void summary(std::ostream& log) const {
     const io::can::RxStats& rx = filter_.stats();
     const io::can::TransportCounters& tc = bus_.counters();
@@ -178,6 +184,17 @@ class LcmEcuWire {
   std::int64_t session_ = 0, heard_ns_ = 0;  // the followed plant session, when it was last heard
 };
 
+// Every complete sample that has come in, answered; true if anything of the plant's came.
+template <class Wire, class Controller, class Command>
+bool answer(Controller& ecu, Wire& wire, Command& command, BusEcuResult& res) {
+  return wire.receive([&](const auto& sensors) {
+    ecu.update(sensors, command);
+    command.stamp = sensors.stamp;  // the sample it answers
+    res.saturated += wire.send_command(command);
+    ++res.samples;
+  });
+}
+
 template <class Wire, class Controller>
 BusEcuResult serve(Controller& ecu, Wire& wire, const BusEcuOptions& opt, const std::atomic<int>* stop,
                    std::ostream& log) {
@@ -205,13 +222,7 @@ BusEcuResult serve(Controller& ecu, Wire& wire, const BusEcuOptions& opt, const 
       break;
     }
     wire.wait(100'000'000);
-    const bool got = wire.receive([&](const auto& sensors) {
-      ecu.update(sensors, command);
-      command.stamp = sensors.stamp;  // the sample it answers
-      res.saturated += wire.send_command(command);
-      ++res.samples;
-    });
-    if (got) {
+    if (answer(ecu, wire, command, res)) {
       last_frame_ns = now_ns();
       heard = true;
     }
@@ -247,7 +258,38 @@ BusEcuResult serve_scenario(const Scenario& sc, MakeWire&& make_wire, const BusE
   return go(follower, wire);
 }
 
+template <class Sensors, class Controller>
+class CanEcuNodeOf final : public CanEcuNode {
+ public:
+  CanEcuNodeOf(Controller controller, io::can::Transport& bus, double h_s)
+      : controller_(std::move(controller)), wire_(bus, h_s) {}
+  void poll() override { answer(controller_, wire_, command_, res_); }
+  void report(io::JsonObject& out) const override {
+    out.integer("samples_answered", res_.samples);
+    out.integer("incomplete_samples", wire_.incomplete());
+    out.integer("frames_rejected", wire_.rejected());
+    out.integer("saturated_signals", res_.saturated);
+  }
+
+ private:
+  Controller controller_;
+  CanEcuWire<Sensors> wire_;
+  typename BusFamily<Sensors>::Command command_{};
+  BusEcuResult res_;
+};
+
 }  // namespace
+
+std::unique_ptr<CanEcuNode> make_can_ecu_node(const Scenario& sc, io::can::Transport& bus) {
+  if (const auto* e = sc.ecu.get_if<ecu::PsdEcuParams>()) {
+    return std::make_unique<CanEcuNodeOf<msgs::PsdSensors, ecu::PsdEcu>>(ecu::PsdEcu(*e, e->period_s), bus,
+                                                                        sc.solver.step_s);
+  }
+  if (sc.ecu.holds<ecu::EvFollowerParams>()) {
+    return std::make_unique<CanEcuNodeOf<msgs::EvSensors, ecu::EvFollower>>(ecu::EvFollower{}, bus, sc.solver.step_s);
+  }
+  return nullptr;
+}
 
 bool has_bus_ecu(const Scenario& sc, std::string& why) {
   if (sc.ecu.holds<ecu::PsdEcuParams>() || sc.ecu.holds<ecu::EvFollowerParams>()) {

@@ -9,10 +9,12 @@
 #include <atomic>
 #include <cstdint>
 #include <iosfwd>
+#include <memory>
 #include <string>
 
 #include "hil/config/config.hpp"
 #include "io/can/transport.hpp"
+#include "io/json_writer.hpp"
 #include "io/lcm/lcm_bus.hpp"
 
 namespace ehpt::hil {
@@ -38,5 +40,18 @@ BusEcuResult run_bus_ecu(const Scenario& sc, io::can::Transport& bus, const BusE
 // The same over LCM: <prefix>PLANT_STATUS in, <prefix>ECU_COMMAND out.
 BusEcuResult run_bus_ecu(const Scenario& sc, io::lcm::LcmBus& bus, const std::string& prefix,
                          const BusEcuOptions& opt, const std::atomic<int>* stop, std::ostream& log);
+
+// The same ECU served one poll at a time, in the caller's thread (hil/bus/in_process_bus.hpp):
+// poll() answers every complete sample that has come in, and returns at once.
+class CanEcuNode {
+ public:
+  virtual ~CanEcuNode() = default;
+  virtual void poll() = 0;
+  // its figures: samples answered, incomplete samples (frames a bus fault took), frames its
+  // receive rules refused (a corrupt or counter-jumped frame), signals the codec saturated
+  virtual void report(io::JsonObject& out) const = 0;
+};
+// The scenario's built-in ECU on bus (has_bus_ecu must hold; nullptr otherwise).
+std::unique_ptr<CanEcuNode> make_can_ecu_node(const Scenario& sc, io::can::Transport& bus);
 
 }  // namespace ehpt::hil

@@ -53,7 +53,7 @@ class BusPlant final : public ExternalDriver,
 
   bool open(const io::OutputDir& dir, std::string& error) override {
     if (!wire_.open(dir, error) || !inputs_.open(dir.file(kInputsLogName), error)) return false;
-    inputs_buf_.append(inputs_log_header(opt_.scenario_path, opt_.overrides, F::kFamily, pacing()));
+    inputs_buf_.append(inputs_log_header(opt_.scenario_path, opt_.overrides, opt_.faults, F::kFamily, pacing()));
     return true;
   }
 

@@ -44,6 +44,7 @@ struct BusPlantOptions {
   // inputs.log's header (hil/bus/session_log.hpp): what `ehpt replay` loads again
   std::string scenario_path;
   std::vector<std::string> overrides;
+  std::vector<std::string> faults;  // the --fault one-offs, as given
 };
 
 // False and a one-line reason if the scenario cannot run on the bus (a rig without bus

@@ -29,9 +29,10 @@ int format_command(char* buf, std::size_t size, std::int64_t step, const msgs::P
 }
 
 std::string inputs_log_header(const std::string& scenario_path, const std::vector<std::string>& overrides,
-                              const char* family, const char* pacing) {
+                              const std::vector<std::string>& faults, const char* family, const char* pacing) {
   std::string h = "# ehpt inputs log 1\n# scenario " + scenario_path + "\n";
   for (const std::string& o : overrides) h += "# set " + o + "\n";
+  for (const std::string& f : faults) h += "# fault " + f + "\n";
   h += std::string("# family ") + family + "\n# pacing " + pacing + "\n";
   return h;
 }
@@ -228,6 +229,12 @@ bool read_inputs_log(const std::string& path, InputsLog& out, std::vector<std::s
           bad("'# set' after the commands: the header comes before them");
         } else {
           out.overrides.emplace_back(*v2);
+        }
+      } else if (const auto vf = value("fault")) {
+        if (commands_seen) {
+          bad("'# fault' after the commands: the header comes before them");
+        } else {
+          out.faults.emplace_back(*vf);
         }
       } else if (const auto v3 = value("family")) {
         header("family", out.family, *v3);

@@ -12,6 +12,7 @@
 //   # ehpt inputs log 1
 //   # scenario /abs/path/scenario.toml
 //   # set key=value                        (each --set, in order)
+//   # fault kind=... target=... at_s=...   (each --fault, in order)
 //   # family ev | psd
 //   # pacing wall_clock | realtime | lockstep
 //   ev  STEP SEQ STAMP_STEP STAMP_TIME_S driveTauRef_Nm
@@ -45,6 +46,7 @@ struct InputsLog {
   InputFile file;  // its SHA-256 and size (a replay's provenance)
   std::string scenario_path;
   std::vector<std::string> overrides;
+  std::vector<std::string> faults;  // --fault one-offs (the scenario file's [[fault]] tables are in it)
   std::string family;  // "ev" or "psd"
   std::string pacing;
   std::int64_t commands = 0;
@@ -100,6 +102,7 @@ class InputsLogReader {
 
 // The header lines of a new log.
 std::string inputs_log_header(const std::string& scenario_path, const std::vector<std::string>& overrides,
+                              const std::vector<std::string>& faults,
                               const char* family, const char* pacing);
 
 }  // namespace ehpt::hil

@@ -811,8 +811,9 @@ std::string bus_faults_refused(const Scenario& sc, const ExternalDriver* driver)
   if (driver != nullptr) {
     return what + "and this session's bus carries none (LCM): run it over socketcand or SocketCAN (--bus socketcand:HOST:PORT)";
   }
-  return what + "and this run has no bus (the built-in ECU is called in-process): run it with an ECU over a bus, "
-                "`ehpt test FILE --bus socketcand:127.0.0.1:29600 --ecu-cmd ehpt ecu {test} --bus {bus}` (or `ehpt plant`)";
+  return what + "and this run calls the built-in ECU directly, with no frames between them: run it with `ehpt run "
+                "FILE` or `ehpt test FILE` (they put the built-in ECU on an in-process CAN bus), or with an ECU over a "
+                "bus (`ehpt plant FILE --bus ...`)";
 }
 
 BatchResult run_batch(const Scenario& sc, const BatchOptions& opt, std::ostream& log) {
@@ -821,6 +822,11 @@ BatchResult run_batch(const Scenario& sc, const BatchOptions& opt, std::ostream&
   if (opt.stop_signal != nullptr && opt.stop_signal->load() != 0) {
     log << "interrupted by " << signal_name(opt.stop_signal->load()) << " before the run started; nothing was run\n";
     res.exit_code = 128 + opt.stop_signal->load();
+    return res;
+  }
+  if (std::string why; opt.realtime != nullptr && opt.driver != nullptr && !opt.driver->realtime_capable(why)) {
+    log << "error: --realtime: " << why << "; nothing was run\n";  // before the output folder
+    res.exit_code = 2;
     return res;
   }
   if (const std::string why = bus_faults_refused(sc, opt.driver); !why.empty()) {

@@ -29,7 +29,7 @@ std::string temp_log(const std::string& name, const std::string& text) {
 const char* kHead = "# ehpt inputs log 1\n# scenario /x/ev.toml\n# set a=1\n# set b=2\n# family ev\n# pacing lockstep\n";
 
 TEST(InputsLog, TheCommandsComeBackExactlyAndTheDigestIsTheFiles) {
-  std::string text = kHead;
+  std::string text = std::string(kHead) + "# fault kind=drop target=EvCommand at_s=1\n";
   std::vector<msgs::EvCommand> written;
   char line[256];
   for (int k = 0; k < 70000; ++k) {  // more than one 64 KiB block, lines across block ends
@@ -45,6 +45,7 @@ TEST(InputsLog, TheCommandsComeBackExactlyAndTheDigestIsTheFiles) {
   ASSERT_TRUE(hil::read_inputs_log(path, log, problems)) << problems.front();
   EXPECT_EQ(log.scenario_path, "/x/ev.toml");
   EXPECT_EQ(log.overrides, (std::vector<std::string>{"a=1", "b=2"}));
+  EXPECT_EQ(log.faults, (std::vector<std::string>{"kind=drop target=EvCommand at_s=1"}));  // --fault: replayed too
   EXPECT_EQ(log.family, "ev");
   EXPECT_EQ(log.pacing, "lockstep");
   EXPECT_EQ(log.commands, 70000);
@@ -124,6 +125,20 @@ TEST(InputsLog, ParseInputsLineTakesExactlyTheFormat) {
   for (const char* bad : {"ev", "ev 1 2", "ev x 0 0 1 2", "ev 1 -1 0 1 2", "ev 1 2 3 inf", "ev 1 2 3 0x", "ev 1 2 3 1 2 3 4 5 6 7",
                           "ev 1 2 3 --1"}) {
     EXPECT_FALSE(hil::parse_inputs_line(bad, l, why)) << bad;
+  }
+}
+
+// The header comes first: a --set or --fault line after a command would change what the
+// commands above it were run with, so it is a problem of the log, with its line.
+TEST(InputsLog, AHeaderLineAfterTheCommandsIsRefused) {
+  for (const char* key : {"set a=3", "fault kind=drop target=EvCommand at_s=2"}) {
+    const std::string text = std::string(kHead) + "ev 0 0 0 0 1.5\n# " + key + "\nev 10 1 10 0.01 1.5\n";
+    hil::InputsLog log;
+    std::vector<std::string> problems;
+    EXPECT_FALSE(hil::read_inputs_log(temp_log("late_header.log", text), log, problems)) << key;
+    ASSERT_EQ(problems.size(), 1u) << key;
+    const std::string word = std::string(key).substr(0, std::string(key).find(' '));
+    EXPECT_NE(problems[0].find(":8: '# " + word + "' after the commands"), std::string::npos) << problems[0];
   }
 }
 

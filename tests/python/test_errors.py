@@ -66,7 +66,7 @@ class LoadErrors(unittest.TestCase):
             with self.assertRaises(ValueError) as cm:
                 call()
             self.assertIn("kind = \"drop\" on PsdCommand1 acts on CAN frames", str(cm.exception))
-            self.assertIn("--bus socketcand", str(cm.exception))
+            self.assertIn("`ehpt test FILE` (they put the built-in ECU on an in-process CAN bus)", str(cm.exception))
 
     def test_external_ecu_needs_an_ecu(self):
         with self.assertRaises(ValueError) as cm:

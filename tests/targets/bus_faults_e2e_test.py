@@ -15,14 +15,20 @@ samples); the plant runs in lockstep on 127.0.0.1. Checked:
 - a counter_freeze on PsdCommand1: the plant's counter rule refuses the repeats (bad_counter);
   a counter_jump: refused once where it jumps and once where it jumps back, no timeout;
 - replay of the faulted session: bit-identical;
-- refused before anything runs (exit 2, the file:line): a bus fault in `ehpt run`, in
-  `ehpt test` without a bus, over LCM, on a message the contract has not.
-- the shipped example (examples/tests/bus/) passes.
+- without a bus (`ehpt test` alone, `ehpt run`), the built-in ECU on the in-process CAN bus:
+  each faulted test gives the socketcand session's trajectory_hash, verdicts and bus figures;
+  a --fault one-off is in inputs.log and the session replays bit for bit;
+- over LCM a test with a bus fault is skipped, with its reason (exit 0, JUnit <skipped>);
+- refused before anything runs (exit 2, the file:line): a bus fault on a message the
+  contract has not; with --realtime (the in-process bus is lockstep);
+- the shipped example (examples/tests/command_frames_dropped.toml) passes, over socketcand and
+  in-process.
 Exit 0 if every check passed, 1 otherwise.
 """
 
 import json
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -118,7 +124,34 @@ with tempfile.TemporaryDirectory() as tmp:
             replayed = json.load(f)
         check(outcomes(replayed) == outcomes(s), f"the replay's verdict is the session's: {outcomes(replayed)}")
 
+    # the same tests without a bus: the built-in ECU on the in-process bus gives the session
+    # the socketcand one gave (drop_cmd above; the others below), bit for bit
+    in_process = {}
+    for path in (drop, status, freeze, delay, jump):
+        name = os.path.splitext(os.path.basename(path))[0]
+        in_process[name] = run_test(path, os.path.join(tmp, "m_" + name), [])
+    rc_m, text_m, m = in_process["drop_cmd"]
+    check(rc_m == 0 and m is not None and s is not None, f"drop_cmd in-process: the test runs ({rc_m})\n{text_m[-800:]}")
+    if m and s:
+        check(m["bus"]["transport"] == "in-process" and m["trajectory_hash"] == s["trajectory_hash"],
+              f"in-process == socketcand: {m['bus']['transport']} {m['trajectory_hash']} {s['trajectory_hash']}")
+        check(m["ecu_in_process"]["samples_answered"] == 1201 and m["heap_allocations_after_startup"] == 0,
+              f"the in-process ECU answered every sample it got whole, no allocation: {m['ecu_in_process']}")
+
+    def same_session(name, s):
+        rc_m, text_m, m = in_process[name]
+        if not (rc_m == 0 and m is not None and s is not None):
+            check(False, f"{name} in-process: the test runs ({rc_m})\n{text_m[-800:]}")
+            return
+        keys = ("faults", "timeouts", "timeouts_under_bus_faults", "samples_not_awaited", "commands_lost_to_faults",
+                "messages_received", "commands_applied", "safe_state_time_s")
+        check(m["trajectory_hash"] == s["trajectory_hash"] and outcomes(m) == outcomes(s)
+              and all(m["bus"][k] == s["bus"][k] for k in keys),
+              f"{name}: in-process == socketcand (hash, verdicts, {', '.join(keys)}): "
+              + str([(k, m["bus"][k], s["bus"][k]) for k in keys if m["bus"][k] != s["bus"][k]]))
+
     rc, text, s = run_test(status, os.path.join(tmp, "o_status"))
+    same_session("drop_status", s)
     check(rc == 0 and s is not None, f"PlantStatus dropped: the test runs ({rc})\n{text[-800:]}")
     if s:
         b = s["bus"]
@@ -129,6 +162,7 @@ with tempfile.TemporaryDirectory() as tmp:
         check(s["status"] == "ok", f"not degraded: {s['status']} {s.get('degraded')}")
 
     rc, text, s = run_test(freeze, os.path.join(tmp, "o_freeze"))
+    same_session("freeze", s)
     check(rc == 0 and s is not None, f"counter_freeze: the test runs ({rc})\n{text[-800:]}")
     if s:
         b = s["bus"]
@@ -136,6 +170,7 @@ with tempfile.TemporaryDirectory() as tmp:
               f"the frozen counter is refused: {b['messages_received']['PsdCommand1']}, {b['timeouts']} timeouts")
 
     rc, text, s = run_test(delay, os.path.join(tmp, "o_delay"))
+    same_session("delay", s)
     check(rc == 0 and s is not None, f"delay and duplicate: the test runs ({rc})\n{text[-800:]}")
     if s:
         b = s["bus"]
@@ -148,6 +183,7 @@ with tempfile.TemporaryDirectory() as tmp:
               f"{b['timeouts']}, {s['heap_allocations_after_startup']}")
 
     rc, text, s = run_test(jump, os.path.join(tmp, "o_jump"))
+    same_session("jump", s)
     check(rc == 0 and s is not None, f"counter_jump: the test runs ({rc})\n{text[-800:]}")
     if s:
         b = s["bus"]
@@ -156,19 +192,50 @@ with tempfile.TemporaryDirectory() as tmp:
         check(b["messages_received"]["PsdCommand1"]["bad_counter"] == 2 and b["timeouts"] == 0,
               f"a jumped counter is refused once each way: {b['messages_received']['PsdCommand1']}, {b['timeouts']} timeouts")
 
-    rc, text, s = run_test(os.path.join(SRC, "examples", "tests", "bus"), os.path.join(tmp, "o_example"))
+    example = os.path.join(SRC, "examples", "tests", "command_frames_dropped.toml")
+    rc, text, _ = run_test(example, os.path.join(tmp, "o_example"))
     check(rc == 0 and "1 test: 1 passed" in text, f"the shipped bus-fault example passes ({rc})\n{text[-800:]}")
+    rc, text, _ = run_test(example, os.path.join(tmp, "m_example"), [])
+    check(rc == 0 and "1 test: 1 passed" in text, f"... and in-process ({rc})\n{text[-800:]}")
 
-    # refused before anything runs
+    # ehpt run with a --fault one-off: the in-process bus; inputs.log keeps the fault, so the
+    # session replays bit for bit (without it the replay would differ, and say so)
+    one_off = "kind=drop target=PsdCommand1 at_s=10.0 until_s=10.5"
     out = os.path.join(tmp, "o_run")
-    r = subprocess.run([EHPT, "run", drop, "--out", out], capture_output=True, text=True, timeout=60)
-    check(r.returncode == 2 and "drop_cmd.toml:4: kind = \"drop\" on PsdCommand1 acts on CAN frames" in r.stderr
-          and not os.path.exists(out), f"ehpt run refuses a bus fault, no folder ({r.returncode}): {r.stderr[-300:]}")
-    rc, text, _ = run_test(drop, os.path.join(tmp, "o_nobus"), [])
-    check(rc == 2 and "acts on CAN frames" in text, f"ehpt test without a bus refuses it ({rc}): {text[-300:]}")
+    r = subprocess.run([EHPT, "run", "psecu2_nedc", "--set", "solver.duration_s=12", "--fault", one_off, "--out", out],
+                       capture_output=True, text=True, timeout=60)
+    check(r.returncode == 0, f"ehpt run --fault on a frame runs ({r.returncode}): {r.stderr[-400:]}")
+    if r.returncode == 0:
+        with open(os.path.join(out, "inputs.log")) as f:
+            head = [line.strip() for line in f if line.startswith("#")]
+        check("# fault " + one_off in head and "# set solver.duration_s=12" in head, f"inputs.log's header: {head}")
+        with open(os.path.join(out, "summary.json")) as f:
+            run_s = json.load(f)
+        check(run_s["bus"]["timeouts"] == 1 and run_s["bus"]["faults"][0]["frames"] == 50,
+              f"ehpt run: 50 frames lost, one timeout: {run_s['bus']['faults']}, {run_s['bus']['timeouts']}")
+        r = subprocess.run([EHPT, "replay", out, "--out", os.path.join(tmp, "o_run_replay")], capture_output=True,
+                           text=True, timeout=120)
+        check(r.returncode == 0 and "bit-identical" in r.stderr + r.stdout, f"... and replays bit for bit\n{r.stderr[-600:]}")
+
+    # over LCM: skipped, with the reason, in the table and the JUnit file
+    junit = os.path.join(tmp, "lcm.xml")
     rc, text, _ = run_test(drop, os.path.join(tmp, "o_lcm"),
-                           ["--bus", "lcm:udpm://239.255.76.67:7667?ttl=0", "--ecu-cmd", "ehpt", "ecu", "{test}", "--bus", "{bus}"])
-    check(rc == 2 and "carries LCM messages" in text, f"ehpt test over LCM refuses it ({rc}): {text[-300:]}")
+                           ["--junit", junit, "--bus", "lcm:udpm://239.255.76.67:7667?ttl=0", "--ecu-cmd", "ehpt", "ecu",
+                            "{test}", "--bus", "{bus}"])
+    check(rc == 0 and re.search(r"drop_cmd +skipped +skipped: .*drop_cmd.toml:4: kind = \"drop\" acts on CAN frames, and "
+                                r"LCM carries none", text) and "0 passed, 0 failed, 0 errors, 1 skipped" in text,
+          f"ehpt test over LCM skips it, saying why ({rc}): {text[-400:]}")
+    if os.path.exists(junit):
+        with open(junit) as f:
+            xml = f.read()
+        check('skipped="1"' in xml and "<skipped message=" in xml and 'failures="0" errors="0"' in xml,
+              f"JUnit: one skipped test: {xml[:600]}")
+    else:
+        check(False, "JUnit file written")
+    r = subprocess.run([EHPT, "run", drop, "--realtime", "--out", os.path.join(tmp, "o_rt")], capture_output=True,
+                       text=True, timeout=60)
+    check(r.returncode != 0 and "in-process CAN bus in lockstep" in r.stderr and not os.path.exists(os.path.join(tmp, "o_rt")),
+          f"--realtime with a bus fault is refused, no folder ({r.returncode}): {r.stderr[-300:]}")
     typo = test_file(tmp, "typo", 'kind = "drop"\ntarget = "PsdComand1"')
     rc, text, _ = run_test(typo, os.path.join(tmp, "o_typo"))
     check(rc == 2 and "typo.toml:4" in text and 'did you mean "PsdCommand1"' in text and "nothing was run" in text,

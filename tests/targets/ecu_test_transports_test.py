@@ -11,13 +11,15 @@ examples/tests/suite.toml is run by `ehpt test` four ways:
   (CAN quantises the signals exactly as the codec does);
 - `ehpt ecu` over LCM udpm (in this private network namespace, ttl=0), two at a time, each
   slot on its own port (7667 + k): verdicts and hashes equal the plain run's (LCM carries
-  the doubles). udpm may lose a datagram under load; a
+  the doubles). A test with a bus fault (on CAN frames) runs on the in-process CAN bus in
+  the plain and codec runs, equal to socketcand's session; over LCM it is skipped, saying why. udpm may lose a datagram under load; a
   test that then ended degraded (an <error>) is run once more, and says so.
 Exit 0 if every check passed, 1 otherwise; 77 (skipped) outside a network namespace.
 """
 
 import json
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -71,7 +73,14 @@ with tempfile.TemporaryDirectory() as tmp:
     check(rc == 0, f"ehpt ecu over LCM: the suite passes ({rc})\n{text[-1500:]}")
     ports = {name: run[3].split("udpm://239.255.76.67:")[-1].split("?")[0] for name, run in lcm.items()}
     check(set(ports.values()) == {"7667", "7668"}, f"the two LCM slots on ports 7667 and 7668: {ports}")
-    for name in sorted(plain):
+    on_frames = sorted(name for name, run in plain.items() if run[3] == "in-process")
+    check(on_frames == ["command_frames_dropped"], f"the bus-fault test runs on the in-process bus: {on_frames}")
+    for name in on_frames:
+        check(plain[name][:2] == can.get(name, (None, None))[:2],
+              f"{name}: in-process bus == socketcand: {plain[name]} {can.get(name)}")
+        check(name not in lcm and re.search(name + r" +skipped +skipped: ", text) and "LCM carries none" in text,
+              f"{name}: skipped over LCM, saying why\n{text[-600:]}")
+    for name in sorted(set(plain) - set(on_frames)):
         check(lcm.get(name, (None, None))[:2] == plain[name][:2],
               f"{name}: LCM verdict and trajectory_hash {lcm.get(name)} == plain run's {plain[name]}")
 
