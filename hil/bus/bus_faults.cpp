@@ -45,6 +45,14 @@ bool BusFaults::resolve(const std::vector<FaultSpec>& faults, const Binding& bin
     if (s.side != FaultSide::kBus) continue;
     const std::string label = s.where + ": fault[" + std::to_string(i) + "] (kind = \"" +
                               fault_effect_name(s.effect) + "\", target = \"" + s.target + "\")";
+    // sample 0 is how the plant finds its ECU (sent again until answered): never faulted
+    const double first_s = step_s * static_cast<double>(std::max<std::int64_t>(1, ecu_ratio));
+    if (!s.has_when && s.at_s < first_s * (1.0 - 1e-9)) {
+      errors.push_back(label + ": at_s = " + io::number_text(s.at_s) + ": a bus fault starts at the ECU's second sample (at_s >= " +
+                       io::number_text(first_s) + " s) or later: sample 0 is the plant's first exchange, how it finds "
+                       "its ECU, and is never faulted");
+      continue;
+    }
     if (s.effect == FaultEffect::kErrorFrames && !error_frames_ok) {
       errors.push_back(label + ": CAN error frames need a bus that carries them: SocketCAN (--bus socketcan:vcan0); "
                        "socketcand's protocol has none (bus_off silences the bus on any CAN transport)");

@@ -41,6 +41,7 @@ FaultSpec bus_fault(FaultEffect e, const std::string& target) {
   f.effect = e;
   f.target = target;
   f.side = FaultSide::kBus;
+  f.at_s = 0.5;
   return f;
 }
 
@@ -341,6 +342,18 @@ TEST(BusFaults, WhatTheBindingCannotTakeIsALoadErrorWithItsLine) {
   };
   has(error_of(bus_fault(FaultEffect::kDrop, "PsdComand1"), psd), "did you mean \"PsdCommand1\"");
   has(error_of(bus_fault(FaultEffect::kDrop, "EvCommand"), psd), "no message of that name");
+  FaultSpec early = bus_fault(FaultEffect::kDrop, "PsdCommand1");
+  early.at_s = 0.0099;  // inside sample 0's period
+  has(error_of(early, psd), "at_s = 0.0099: a bus fault starts at the ECU's second sample (at_s >= 0.01 s) or later");
+  early.at_s = 0.01;
+  {
+    BusFaults out;
+    std::vector<std::string> errors;
+    EXPECT_TRUE(BusFaults::resolve({early}, psd, kStep, kRatio, false, out, errors));
+    early.at_s = 0.0;
+    early.has_when = true;  // a trigger: it acts from the step after it holds, never at sample 0
+    EXPECT_TRUE(BusFaults::resolve({early}, psd, kStep, kRatio, false, out, errors));
+  }
   FaultSpec c = bus_fault(FaultEffect::kCorrupt, "PsdCommand1");
   c.byte = 8;
   has(error_of(c, psd), "byte = 8 is outside the frame");
