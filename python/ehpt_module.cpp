@@ -32,6 +32,7 @@
 #include "ecu/ev_follower.hpp"
 #include "ecu/psd_ecu.hpp"
 #include "hil/bus/bus_family.hpp"
+#include "hil/bus/in_process_bus.hpp"
 #include "hil/config/config.hpp"
 #include "hil/config/scenario.hpp"
 #include "hil/diag/provenance.hpp"
@@ -472,7 +473,7 @@ std::optional<hil::CycleArrays> cycle_of(const py::object& cycle) {
 // name_error: the name itself is the problem (no such scenario), errors holds that one message.
 bool load(const std::string& name, const std::vector<std::string>& overrides, const std::optional<hil::CycleArrays>& cycle,
           hil::Scenario& sc, std::vector<std::string>& errors, bool& name_error,
-          const std::vector<std::string>& faults = {}) {
+          const std::vector<std::string>& faults = {}, bool bus_faults_ok = false) {
   // a C string would end at a NUL: "ev_nedc.toml\0junk" must not run ev_nedc.toml
   if (name.find('\0') != std::string::npos) {
     errors.push_back("the scenario name contains a NUL character");
@@ -495,11 +496,14 @@ bool load(const std::string& name, const std::vector<std::string>& overrides, co
               : hil::load_scenario(path, overrides, faults, sc, errors))) {
     return false;
   }
-  if (const std::string why = hil::bus_faults_refused(sc, nullptr); !why.empty()) {
-    errors.push_back(why);  // the module calls its ECU in-process: no frames for a bus fault to act on
-    return false;
-  }
-  return true;
+  if (bus_faults_ok || !hil::has_bus_faults(sc)) return true;
+  // a Simulation calls its ECU (or takes yours) directly: no frames for a bus fault to act on
+  const auto f = std::find_if(sc.faults.begin(), sc.faults.end(), [](const hil::FaultSpec& x) { return x.side == hil::FaultSide::kBus; });
+  errors.push_back(f->where + ": kind = \"" + hil::fault_effect_name(f->effect) + "\" on " + f->target +
+                   " acts on CAN frames, and a Simulation steps the plant with its commands passed directly, no frames "
+                   "between them: ehpt.run(...) takes bus faults (the built-in ECU on an in-process CAN bus), as do "
+                   "`ehpt run` and `ehpt test`");
+  return false;
 }
 
 // faults=None or a list of str, each as `ehpt run --fault` takes it ("kind=stuck target=batSOC
@@ -568,7 +572,7 @@ struct RunResult {
   py::object summary;     // dict: summary.json as json.loads reads it (NaN is null -> None)
   py::list columns;       // timeseries.csv's header
   py::dict timeseries;    // name -> float64 array
-  int exit_code = 0;      // 0 ok, 3 run-time fault (outputs kept), 128 + signal interrupted
+  int exit_code = 0;      // 0 ok, 3 run-time fault (outputs kept), 4 degraded, 5 a test failed, 128 + signal
   py::list warnings;
   py::str text;           // the lines `ehpt run` prints
 };
@@ -584,8 +588,21 @@ RunResult run(const ScenarioArg& scenario_arg, const SetArg& set, const CycleArg
   bool loaded = false, name_error = false;
   {
     py::gil_scoped_release released;
-    loaded = load(scenario, overrides, cycle, sc, errors, name_error, faults);
-    if (loaded) mr = hil::run_in_memory(sc);
+    loaded = load(scenario, overrides, cycle, sc, errors, name_error, faults, true);
+    std::unique_ptr<hil::ExternalDriver> bus;  // bus faults: the built-in ECU on an in-process CAN bus
+    if (loaded && hil::has_bus_faults(sc)) {
+      std::string error;
+      hil::BusPlantOptions bo;
+      bo.scenario_path = sc.path;
+      bo.overrides = overrides;
+      bo.faults = faults;
+      bus = hil::make_in_process_bus(sc, bo, error);
+      if (!bus) {
+        errors.push_back(error);
+        loaded = false;
+      }
+    }
+    if (loaded) mr = hil::run_in_memory(sc, nullptr, bus.get());
   }
   if (!loaded) throw_load_errors(scenario, errors, overrides, name_error);
   RunResult r;
@@ -1046,12 +1063,14 @@ Arguments:
             ["kind=stuck target=batSOC at_s=300"] (docs/testing.md); they add to the file's
             [[fault]] tables. A test file's [[expect]] verdict is summary["test"]
             (verdict, expectations with message, time and value), exit_code 5 if one failed;
-            timeseries gets a faults_active column.
+            timeseries gets a faults_active column. A bus fault (on CAN frames) runs the
+            built-in ECU on an in-process CAN bus, summary["bus"] its figures.
 
 Returns:
   RunResult: summary (summary.json as a dict), columns, timeseries ({name: float64 array}),
-  exit_code (0 ok; 3 a run-time fault such as SOC out of its window; 5 an expectation of a
-  test failed: the outputs are kept, nothing is raised), warnings, text; to_dataframe() gives
+  exit_code (0 ok; 3 a run-time fault such as SOC out of its window; 4 degraded: with bus
+  faults, a command timeout no fault explains; 5 an expectation of a test failed: the outputs
+  are kept, nothing is raised), warnings, text; to_dataframe() gives
   a pandas DataFrame.
 
 Raises:
@@ -1130,7 +1149,7 @@ PYBIND11_MODULE(ehpt, m) {
       .def_property_readonly(
           "timeseries", [](const RunResult& r) { return ArrayDict(r.timeseries); },
           "{name: 1-D float64 numpy array}, in column order (0 rows with output.timeseries = false).")
-      .def_readonly("exit_code", &RunResult::exit_code, "The CLI's: 0 ok, 3 a run-time fault (outputs kept).")
+      .def_readonly("exit_code", &RunResult::exit_code, "The CLI's: 0 ok, 3 a run-time fault (outputs kept), 4 degraded (bus faults), 5 a test failed.")
       .def_property_readonly(
           "warnings", [](const RunResult& r) { return StrList(r.warnings); },
           "What the CLI prints as 'warning: ...' (legal but surprising settings).")

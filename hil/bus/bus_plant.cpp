@@ -57,6 +57,11 @@ class BusPlant final : public ExternalDriver,
     return true;
   }
 
+  void discard_files() override {
+    inputs_.discard();
+    if constexpr (requires { wire_.discard_files(); }) wire_.discard_files();
+  }
+
   bool realtime_capable(std::string& why) const override {
     if (opt_.lockstep) {
       why = "--lockstep waits for the ECU's command at every sample: it cannot keep a real-time period (use one or the other)";

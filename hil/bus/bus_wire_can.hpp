@@ -136,6 +136,11 @@ class CanWire {
     asc_buf_.append(io::can::asc_header(asc_start_s_));
     return true;
   }
+  // A run into memory: bus.log (and bus.asc) not written.
+  void discard_files() {
+    log_.discard();
+    asc_log_.discard();
+  }
   // After the last step: the ASC log's last line.
   void finish() {
     if (asc_) asc_buf_.append(io::can::asc_footer());

@@ -35,6 +35,7 @@ class InProcessBus final : public ExternalDriver {
   }
 
   bool open(const io::OutputDir& dir, std::string& error) override { return plant_->open(dir, error); }
+  void discard_files() override { plant_->discard_files(); }
   void start(Simulation& sim, const std::atomic<int>* stop) override { plant_->start(sim, stop); }
   bool realtime_capable(std::string& why) const override {
     why = "its bus faults run the built-in ECU over an in-process CAN bus in lockstep, which keeps no real-time "

@@ -778,13 +778,24 @@ std::string test_verdict_json(const Scenario& sc, Simulation& sim) {
   return test_json(verdict_of(sc, report_of(sim, Streamed{}), LinkFigures{})).str();
 }
 
-MemoryRun run_in_memory(const Scenario& sc, const std::atomic<int>* stop) {
+MemoryRun run_in_memory(const Scenario& sc, const std::atomic<int>* stop, ExternalDriver* driver) {
   MemoryRun res;
+  if (const std::string why = bus_faults_refused(sc, driver); !why.empty()) {
+    res.exit_code = 2;
+    res.summary_text = "error: " + why + "\n";
+    return res;
+  }
   const std::vector<SignalInfo> signals = scenario_signals(sc);
   const std::vector<int> columns = chosen_columns(sc, signals);
   for (const int c : columns) res.columns.emplace_back(signals[static_cast<std::size_t>(c)].name);
   if (!sc.faults.empty()) res.columns.emplace_back("faults_active");
-  const std::unique_ptr<Simulation> sim = make_simulation(sc, SimulationOptions{columns, kChunkSteps});
+  SimulationOptions sim_opt{columns, kChunkSteps};
+  if (driver != nullptr) {  // as run_batch
+    sim_opt.external_ecu = true;
+    sim_opt.fault_policy = FaultPolicy::kHold;
+    driver->discard_files();
+  }
+  const std::unique_ptr<Simulation> sim = make_simulation(sc, sim_opt);
   if (sc.output.timeseries) {
     // the rows a whole run records (every decimation-th step and the last), so that the vector
     // does not grow in the loop; a longer record than 64 Mi values grows as it goes
@@ -794,9 +805,15 @@ MemoryRun run_in_memory(const Scenario& sc, const std::atomic<int>* stop) {
   MemorySink sink(sc.output.timeseries ? &res.rows : nullptr);
   BatchOptions opt;
   opt.stop_signal = stop;
-  std::ostringstream no_log;  // no progress line, no driver: nothing is written to it
+  opt.driver = driver;
+  std::ostringstream no_log;  // no progress line: nothing is written to it
   const Report r = report_of(*sim, stream(*sim, sc, sink, opt, no_log));
-  conclude(sc, r, nullptr, res);
+  std::string finish_error;
+  if (driver != nullptr) driver->finish(finish_error);
+  conclude(sc, r, driver, res);
+  if (driver != nullptr) driver->report(res.summary, res.summary_text);
+  if (!finish_error.empty() && res.exit_code == 0) res.exit_code = 1;
+  if (res.exit_code == 0 && !res.degraded.empty()) res.exit_code = kExitDegraded;
   if (res.exit_code == 0 && res.test.present && !res.test.passed) res.exit_code = kExitExpectationFailed;
   return res;
 }

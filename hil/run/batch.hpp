@@ -39,6 +39,8 @@ class ExternalDriver {
   virtual ~ExternalDriver() = default;
   // Start-up: the output folder is open; false and error if the driver's files cannot be made.
   virtual bool open(const io::OutputDir& dir, std::string& error) = 0;
+  // Instead of open, for a run into memory (run_in_memory: no folder): its files are not written.
+  virtual void discard_files() {}
   // Start-up, before t = 0 (may wait for the ECU; not timed): plugs its port (and its pacer,
   // if it paces: the wall clock) into the simulation (Simulation::attach). stop: non-zero
   // ends its waits, then and in the run.
@@ -156,7 +158,9 @@ struct MemoryRun : BatchResult {
   std::vector<std::string> columns;  // signal names, as the CSV header
   std::vector<double> rows;          // row-major, columns.size() per row
 };
-MemoryRun run_in_memory(const Scenario& scenario, const std::atomic<int>* stop = nullptr);
+// driver: as run_batch's (its files discarded; hil/bus/in_process_bus.hpp for bus faults).
+MemoryRun run_in_memory(const Scenario& scenario, const std::atomic<int>* stop = nullptr,
+                        ExternalDriver* driver = nullptr);
 
 // A test's verdict on a simulation as it stands: summary.json's "test" object (JSON text), its
 // expectations judged as if the run ended at its last step (a window not reached yet fails).

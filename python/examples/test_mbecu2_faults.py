@@ -63,6 +63,19 @@ def test_an_outside_ecu_reads_the_faulted_sensor():
     assert all(soc != 0.42 for t, soc in seen if t < 10.0)
 
 
+def test_command_frames_lost_on_the_bus_put_the_plant_in_its_safe_state():
+    # a bus fault acts on CAN frames: ehpt.run puts the built-in ECU on an in-process CAN bus
+    r = ehpt.run("psecu2_nedc", set={"solver.duration_s": 14},
+                 faults=["kind=drop target=PsdCommand1 at_s=12.0 until_s=12.05"])
+    bus = r.summary["bus"]
+    assert r.exit_code == 0 and bus["transport"] == "in-process"
+    assert bus["faults"] == [{"kind": "drop", "message": "PsdCommand1", "direction": "ecu_to_plant", "frames": 5}]
+    assert bus["timeouts"] == 1 and bus["timeouts_under_bus_faults"] == 1
+    t, mot = r.timeseries["time_s"], r.timeseries["motTauRef_Nm"]
+    lost = (t > 12.0215) & (t < 12.0495)  # the command timed out (3 ECU periods) until the frames come again
+    assert np.all(mot[lost] == 0.0) and mot[np.searchsorted(t, 12.0)] != 0.0
+
+
 def test_a_bad_fault_is_an_error_naming_it():
     with pytest.raises(ehpt.Error) as err:
         ehpt.run("psecu2_nedc", faults=["kind=stuk target=batSOC"])

@@ -59,14 +59,19 @@ class LoadErrors(unittest.TestCase):
         with self.assertRaises(TypeError):
             ehpt.run("ev_nedc", set=[("solver.duration_s", 1)])
 
-    def test_bus_faults_need_a_bus(self):
-        # the module calls its ECU in-process: no frames for a bus fault to act on
-        for call in (lambda: ehpt.run("psecu2_nedc", faults=["kind=drop target=PsdCommand1 at_s=1"]),
-                     lambda: ehpt.Simulation("psecu2_nedc", faults=["kind=drop target=PsdCommand1 at_s=1"])):
-            with self.assertRaises(ValueError) as cm:
-                call()
-            self.assertIn("kind = \"drop\" on PsdCommand1 acts on CAN frames", str(cm.exception))
-            self.assertIn("`ehpt test FILE` (they put the built-in ECU on an in-process CAN bus)", str(cm.exception))
+    def test_bus_faults_need_frames(self):
+        # a Simulation passes its commands directly: no frames for a bus fault to act on
+        with self.assertRaises(ValueError) as cm:
+            ehpt.Simulation("psecu2_nedc", faults=["kind=drop target=PsdCommand1 at_s=1"])
+        self.assertIn("kind = \"drop\" on PsdCommand1 acts on CAN frames", str(cm.exception))
+        self.assertIn("ehpt.run(...) takes bus faults", str(cm.exception))
+        # ehpt.run takes them (the in-process bus), and refuses what the contract has not
+        with self.assertRaises(ValueError) as cm:
+            ehpt.run("psecu2_nedc", faults=["kind=drop target=PsdComand1 at_s=1"])
+        self.assertIn('did you mean "PsdCommand1"', str(cm.exception))
+        with self.assertRaises(ValueError) as cm:
+            ehpt.run("psecu2_nedc", faults=["kind=drop target=PsdCommand1 at_s=0"])
+        self.assertIn("a bus fault starts at the ECU's second sample", str(cm.exception))
 
     def test_external_ecu_needs_an_ecu(self):
         with self.assertRaises(ValueError) as cm:
