@@ -17,7 +17,8 @@ samples); the plant runs in lockstep on 127.0.0.1. Checked:
 - replay of the faulted session: bit-identical;
 - without a bus (`ehpt test` alone, `ehpt run`), the built-in ECU on the in-process CAN bus:
   each faulted test gives the socketcand session's trajectory_hash, verdicts and bus figures;
-  a --fault one-off is in inputs.log and the session replays bit for bit;
+  a --fault one-off is in inputs.log and the session replays bit for bit; a sweep of the test
+  passes with the same trajectory;
 - over LCM a test with a bus fault is skipped, with its reason (exit 0, JUnit <skipped>);
 - refused before anything runs (exit 2, the file:line): a bus fault on a message the
   contract has not; with --realtime (the in-process bus is lockstep);
@@ -216,6 +217,18 @@ with tempfile.TemporaryDirectory() as tmp:
         r = subprocess.run([EHPT, "replay", out, "--out", os.path.join(tmp, "o_run_replay")], capture_output=True,
                            text=True, timeout=120)
         check(r.returncode == 0 and "bit-identical" in r.stderr + r.stdout, f"... and replays bit for bit\n{r.stderr[-600:]}")
+
+    # a sweep runs each test as `ehpt run`: the in-process bus, the socketcand session's trajectory
+    camp = os.path.join(tmp, "camp.toml")
+    with open(camp, "w") as f:
+        f.write(f'scenarios = ["{drop}"]\n')
+    r = subprocess.run([EHPT, "sweep", camp, "--out", os.path.join(tmp, "sweep")], capture_output=True, text=True, timeout=120)
+    with open(os.path.join(tmp, "sweep", "results.jsonl")) as f:
+        rows = [json.loads(line) for line in f if line.strip()]
+    summ = rows[0]["summary"] if len(rows) == 1 else {}
+    check(r.returncode == 0 and summ.get("test", {}).get("verdict") == "passed"
+          and summ.get("trajectory_hash") == (in_process["drop_cmd"][2] or {}).get("trajectory_hash"),
+          f"a sweep of the bus-fault test: passed, the same trajectory ({r.returncode}): {str(rows)[:400]} {r.stderr[-300:]}")
 
     # over LCM: skipped, with the reason, in the table and the JUnit file
     junit = os.path.join(tmp, "lcm.xml")
