@@ -59,6 +59,7 @@ class BusPlant final : public ExternalDriver,
 
   void discard_files() override {
     inputs_.discard();
+    no_inputs_log_ = true;
     if constexpr (requires { wire_.discard_files(); }) wire_.discard_files();
   }
 
@@ -357,6 +358,7 @@ class BusPlant final : public ExternalDriver,
   // Every command the plant applies goes through here: to the plant and into inputs.log.
   void write_command(std::int64_t n, const Command& c, Command& command) {
     command = c;
+    if (no_inputs_log_) return;
     char line[320];
     const int k = format_command(line, sizeof line - 1, n, c);
     if (k > 0 && static_cast<std::size_t>(k) < sizeof line - 1) {
@@ -414,6 +416,7 @@ class BusPlant final : public ExternalDriver,
   }
 
   io::TextFileWriter inputs_;
+  bool no_inputs_log_ = false;  // a run into memory: no inputs.log, nothing formatted for it
   io::HandoffBuffer inputs_buf_{1 << 20};
   std::string inputs_error_;
   Wire wire_;

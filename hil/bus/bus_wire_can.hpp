@@ -140,6 +140,7 @@ class CanWire {
   void discard_files() {
     log_.discard();
     asc_log_.discard();
+    no_log_ = true;  // nor formatted: the text was two thirds of such a run's time
   }
   // After the last step: the ASC log's last line.
   void finish() {
@@ -515,6 +516,7 @@ class CanWire {
   // An error frame the plant put on the bus, in bus.log as candump -L writes one (bus.asc
   // leaves them out: its error-frame lines name a channel's own errors).
   void log_error_frame(io::can::ErrorFrame kind) {
+    if (no_log_) return;
     std::uint32_t id = 0;
     std::array<std::uint8_t, 8> data{};
     io::can::error_frame_bits(kind, id, data);
@@ -532,6 +534,7 @@ class CanWire {
   // Every frame in and out; a full buffer is written out by the loop (also while a lockstep
   // wait takes in a flood) or handed to the writer thread. A failure is kept for flush().
   void log_frames(std::span<const io::can::Frame> frames, bool rx) {
+    if (no_log_) return;
     const double t = wall_time_s();
     for (const auto& f : frames) {
       line_.clear();
@@ -609,6 +612,7 @@ class CanWire {
   io::HandoffBuffer log_buf_;
   std::string line_;       // one candump line (reserved)
   bool background_ = false;
+  bool no_log_ = false;     // a run into memory: bus.log neither written nor formatted
   std::string log_error_;  // the first failed write of bus.log or bus.asc (or the bytes dropped)
   bool asc_ = false;       // bus.asc too
   io::TextFileWriter asc_log_;
