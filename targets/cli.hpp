@@ -64,7 +64,8 @@ int cmd_replay(const std::vector<std::string>& args);   // targets/cmd_replay.cp
 int cmd_list(const std::vector<std::string>& args);     // targets/cmd_list_signals.cpp
 int cmd_signals(const std::vector<std::string>& args);  // targets/cmd_list_signals.cpp
 int cmd_plot(const std::vector<std::string>& args);     // targets/cmd_plot.cpp
-int cmd_dbc(const std::vector<std::string>& args);      // targets/cmd_dbc.cpp
+int cmd_dbc(const std::vector<std::string>& args);
+int cmd_fmu(const std::vector<std::string>& args);      // targets/cmd_fmu.cpp      // targets/cmd_dbc.cpp
 int cmd_test(const std::vector<std::string>& args);     // targets/cmd_test.cpp
 
 }  // namespace ehpt::cli

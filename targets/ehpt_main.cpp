@@ -61,6 +61,7 @@ const char* kMainHelp =
     "  bench            the timing and determinism benchmark; a table and bench.json (--quick: < 1 min)\n"
     "  replay RUN_DIR   run a recorded 'ehpt plant' session again, offline, bit for bit\n"
     "  dbc FILE.dbc     check a DBC as ehpt reads it, list its messages, decode frames with it\n"
+    "  fmu SCENARIO     the scenario as an FMI 3.0 co-simulation FMU (its vehicle and built-in ECU)\n"
     "  test PATH...     run ECU test files (faults, expectations): a verdict table and JUnit XML\n"
     "  sweep CAMPAIGN   run a campaign (scenarios x parameters) locally or as a Slurm job array;\n"
     "                   merged results.csv and results.jsonl\n"
@@ -93,6 +94,7 @@ int dispatch(std::vector<std::string> args) {
   if (cmd == "signals") return cmd_signals(args);
   if (cmd == "plot") return cmd_plot(args);
   if (cmd == "dbc") return cmd_dbc(args);
+  if (cmd == "fmu") return cmd_fmu(args);
   if (cmd == "test") return cmd_test(args);
   if (cmd == "plant") return cmd_plant(args);
   if (cmd == "ecu") return cmd_ecu(args);

@@ -1442,7 +1442,7 @@ TEST(CliHelp, EveryKeyTheRunHelpShowsIsTakenAsShown) {
 TEST(CliHelp, TheDocsQuoteEachHelpAsPrinted) {
   const std::string doc = slurp(ehpt::test::source_path("docs/cli.md"));
   int compared = 0;
-  for (const char* cmd : {"run", "plant", "ecu", "replay", "list", "signals", "plot", "sweep", "bench", "dbc", "test"}) {
+  for (const char* cmd : {"run", "plant", "ecu", "replay", "list", "signals", "plot", "sweep", "bench", "dbc", "test", "fmu"}) {
     const std::string heading = std::string("### ehpt ") + cmd + "\n\n```\n";
     const std::size_t at = doc.find(heading);
     if (at == std::string::npos) continue;

@@ -34,7 +34,8 @@ for f in bin/ehpt libexec/ehpt/plot.py share/ehpt/scenarios/psecu2_nedc.toml sha
          share/ehpt/lcm/psd_sensors_t.lcm include/ehpt/hil/run/simulation.hpp include/ehpt/plant/psd_plant.hpp \
          include/ehpt/ehpt_lcm/psd_sensors_t.hpp "lib/$multiarch/libehpt_hil.a" "lib/$multiarch/cmake/ehpt/ehptConfig.cmake" \
          "lib/$multiarch/cmake/ehpt/ehptTargets.cmake" share/man/man1/ehpt.1.gz share/doc/ehpt/copyright \
-         share/doc/ehpt/changelog.Debian.gz share/doc/ehpt/examples/pycan_ecu.py share/doc/ehpt/examples/embed/main.cpp; do
+         share/doc/ehpt/changelog.Debian.gz share/doc/ehpt/examples/pycan_ecu.py share/doc/ehpt/examples/embed/main.cpp \
+         lib/ehpt/fmu/libehpt_fmu3.so; do
   [ -e "$prefix/$f" ] || fail "the install has no $f"
 done
 ! ls "$prefix"/lib/*.a >/dev/null 2>&1 || fail "static libraries outside lib/$multiarch: $(ls "$prefix"/lib/*.a)"
@@ -65,6 +66,16 @@ bad = [q for q in paths if not q.startswith(sys.argv[2])]
 assert not bad, f"inputs read outside the installed share/ehpt: {bad}"
 assert s["status"] == "ok", s["status"]
 print(f"installed run: {len(paths)} inputs, all under {sys.argv[2]}; run_id {p['run_id'][:12]}")
+EOF
+# the installed ehpt packs an FMU with its own library (source tree hidden)
+"${hidden[@]}" "$ehpt" fmu psecu2_nedc --set solver.duration_s=1 --out fmu_installed.fmu >/dev/null
+/usr/bin/python3 - "$tmp/elsewhere/fmu_installed.fmu" <<'EOF'
+import sys, zipfile
+names = zipfile.ZipFile(sys.argv[1]).namelist()
+for want in ("modelDescription.xml", "binaries/x86_64-linux/ehpt_psecu2_nedc.so", "resources/ehpt-fmu.txt",
+             "resources/vehicles/psecu2.toml"):
+    assert want in names, (want, names)
+print(f"installed ehpt fmu: {len(names)} files")
 EOF
 # and with the source tree in view: the installed ehpt still reads only its own files
 env -u EHPT_SCENARIOS "$ehpt" run ev_nedc --set solver.duration_s=10 --out run_visible --quiet

@@ -1,0 +1,225 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// `ehpt fmu`: the scenario as an FMI 3.0 co-simulation FMU (docs/fmu.md). The FMU carries its
+// library (targets/fmu/, built beside ehpt), the scenario and every file it reads under
+// resources/ (their layout kept, so the scenario's relative paths hold), and a page of its
+// variables; it needs no ehpt on the machine that runs it.
+
+#include <algorithm>
+#include <filesystem>
+#include <iostream>
+#include <set>
+
+#include "hil/config/config.hpp"
+#include "hil/diag/provenance.hpp"
+#include "io/junit.hpp"
+#include "io/number_format.hpp"
+#include "io/output_dir.hpp"
+#include "io/process.hpp"
+#include "io/sha256.hpp"
+#include "io/text_file.hpp"
+#include "io/zip.hpp"
+#include "targets/cli.hpp"
+#include "targets/fmu/fmu_description.hpp"
+#include "targets/fmu/fmu_instance.hpp"
+
+namespace fs = std::filesystem;
+
+namespace ehpt::cli {
+
+namespace {
+
+const char* kFmuHelp =
+    "usage: ehpt fmu SCENARIO [--fmi 3] [--out FILE.fmu] [--set key=value ...]\n"
+    "\n"
+    "Builds an FMI 3.0 co-simulation FMU of the scenario for x86_64-linux: its vehicle with the\n"
+    "built-in ECU driving the scenario's cycle, every output of 'ehpt signals SCENARIO' an FMU\n"
+    "output (Float64, SI units), doStep in whole plant steps (fixedInternalStepSize), the same\n"
+    "trajectory as 'ehpt run' of the scenario. The FMU holds the scenario, vehicle, maps and\n"
+    "cycle under resources/ and runs where ehpt is not installed. docs/fmu.md: the variables,\n"
+    "the calling sequence, and how to import it (FMPy, OMSimulator, Simulink, VEOS, SIL Kit).\n"
+    "  --fmi 3          the FMI version (3.0; 2.0 and inputs/parameters: not yet)\n"
+    "  --out FILE.fmu   where to write it (default out/<scenario name>.fmu); never over an\n"
+    "                   existing file\n"
+    "  --set key=value  as for 'ehpt run': the FMU's scenario is the one with these overrides\n";
+
+// A C identifier from the scenario's name: modelIdentifier, the library's file name.
+std::string identifier_of(const std::string& name) {
+  std::string id = "ehpt_";
+  for (const char c : name) id += (std::isalnum(static_cast<unsigned char>(c)) != 0) ? c : '_';
+  return id;
+}
+
+bool read_file(const std::string& path, std::string& out, std::string& error) {
+  std::string reason;
+  if (!io::read_text_file(path, out, reason, 512u << 20)) {
+    error = path + ": " + reason;
+    return false;
+  }
+  return true;
+}
+
+// The deepest folder that holds every path.
+fs::path common_root(const std::vector<fs::path>& paths) {
+  fs::path root = paths.front().parent_path();
+  for (const fs::path& p : paths) {
+    while (!root.empty() && std::mismatch(root.begin(), root.end(), p.begin(), p.end()).first != root.end()) {
+      root = root.parent_path();
+    }
+  }
+  return root;
+}
+
+std::string documentation_page(const fmu::Description& d, const std::string& id) {
+  using io::xml_escape;
+  std::string h = "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>" + xml_escape(id) +
+                  "</title></head><body>\n<h1>" + xml_escape(d.model_name) + "</h1>\n<p>" + xml_escape(d.description) +
+                  "</p>\n<p>An FMI 3.0 co-simulation FMU made by ehpt (BSD-3-Clause): the vehicle with its built-in ECU "
+                  "on the scenario's cycle. Communication steps are whole multiples of " +
+                  xml_escape(io::number_text(d.step_s)) + " s; startTime 0. Licences: licenses/.</p>\n";
+  h += "<table>\n<tr><th>valueReference</th><th>name</th><th>causality</th><th>unit</th><th>description</th></tr>\n";
+  for (const fmu::Variable& v : d.variables) {
+    h += "<tr><td>" + std::to_string(v.vr) + "</td><td>" + xml_escape(v.name) + "</td><td>" +
+         (v.causality == fmu::Causality::kIndependent ? "independent" : "output") + "</td><td>" + xml_escape(v.unit) +
+         "</td><td>" + xml_escape(v.description) + "</td></tr>\n";
+  }
+  return h + "</table>\n</body></html>\n";
+}
+
+}  // namespace
+
+int cmd_fmu(const std::vector<std::string>& args) {
+  if (wants_help(args)) return out(kFmuHelp) ? 0 : 1;
+  std::string scenario, out_path, fmi = "3";
+  std::vector<std::string> sets;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    if ((a == "--out" || a == "--set" || a == "--fmi") && i + 1 >= args.size()) {
+      std::cerr << a << " needs a value\n" << kFmuHelp;
+      return 1;
+    }
+    if (a == "--out") {
+      out_path = args[++i];
+    } else if (a == "--set") {
+      sets.push_back(args[++i]);
+    } else if (a == "--fmi") {
+      fmi = args[++i];
+    } else if (!a.empty() && a[0] == '-') {
+      std::cerr << "unknown option " << a << "\n" << kFmuHelp;
+      return 1;
+    } else if (scenario.empty()) {
+      scenario = a;
+    } else {
+      std::cerr << "one scenario per FMU (got " << scenario << " and " << a << ")\n";
+      return 1;
+    }
+  }
+  if (scenario.empty()) {
+    std::cerr << kFmuHelp;
+    return 1;
+  }
+  if (fmi != "3") {
+    std::cerr << "--fmi " << fmi << ": this ehpt builds FMI 3.0 FMUs (--fmi 3); FMI 2.0 is not built yet\n";
+    return 2;
+  }
+  hil::Scenario sc;
+  if (const int rc = load(scenario, sets, sc); rc != 0) return rc;
+  for (const std::string& s : sets) {
+    if (s.find('\n') != std::string::npos || s.find('\r') != std::string::npos) {
+      std::cerr << "--set: a line break in '" << s << "' cannot go into the FMU's manifest\n";
+      return 2;
+    }
+  }
+  if (out_path.empty()) out_path = "out/" + sc.name + ".fmu";
+  std::error_code ec;
+  if (fs::exists(fs::symlink_status(out_path, ec))) {
+    std::cerr << "error: --out " << out_path << ": " << io::describe_path(out_path)
+              << " is there already; ehpt fmu never writes over a path (remove it, or give another --out)\n";
+    return 2;
+  }
+  const std::string id = identifier_of(sc.name);
+  std::string error;
+
+  // resources/: every file the scenario read, under the folder that holds them all
+  std::vector<fs::path> inputs;
+  for (const hil::InputFile& f : sc.inputs) inputs.push_back(fs::weakly_canonical(fs::absolute(f.path, ec), ec));
+  const fs::path root = common_root(inputs);
+  std::vector<io::ZipEntry> entries;
+  std::set<std::string> seen;
+  for (const fs::path& p : inputs) {
+    const std::string rel = p.lexically_relative(root).generic_string();
+    if (!seen.insert(rel).second) continue;
+    io::ZipEntry e{"resources/" + rel, ""};
+    if (!read_file(p.string(), e.data, error)) {
+      std::cerr << "error: " << error << "\n";
+      return 2;
+    }
+    entries.push_back(std::move(e));
+  }
+  const fs::path scenario_file = fs::weakly_canonical(fs::absolute(sc.path, ec), ec);
+  const std::string scenario_rel = scenario_file.lexically_relative(root).generic_string();
+
+  // binaries/: the library (it needs the C and C++ runtimes only: toml++ is compiled in)
+  const fs::path self_dir = fs::path(io::self_executable()).parent_path();
+  // the build tree (beside ehpt), or the installation (<prefix>/bin/ehpt, <prefix>/<libdir>/ehpt/fmu/)
+  const std::vector<fs::path> candidates{self_dir / "libehpt_fmu3.so",
+                                         self_dir / ".." / EHPT_INSTALL_LIBDIR / "ehpt" / "fmu" / "libehpt_fmu3.so"};
+  const auto library = std::find_if(candidates.begin(), candidates.end(), [&](const fs::path& p) { return fs::exists(p, ec); });
+  if (library == candidates.end()) {
+    std::cerr << "error: the FMU library libehpt_fmu3.so is not beside this ehpt (" << candidates[0].string() << ", "
+              << candidates[1].string() << "): build the target ehpt_fmu3, or install ehpt\n";
+    return 1;
+  }
+  io::ZipEntry so{"binaries/x86_64-linux/" + id + ".so", ""};
+  if (!read_file(library->string(), so.data, error)) {
+    std::cerr << "error: " << error << "\n";
+    return 1;
+  }
+  entries.push_back(std::move(so));
+  std::string notice;
+  if (read_file("/usr/share/doc/libtomlplusplus3/copyright", notice, error)) {
+    entries.push_back({"documentation/licenses/tomlplusplus.txt", notice});
+  } else {
+    entries.push_back({"documentation/licenses/tomlplusplus.txt",
+                       "toml++ (compiled into the FMU's library), Copyright (c) Mark Gillard, MIT licence: "
+                       "https://github.com/marzer/tomlplusplus/blob/master/LICENSE\n"});
+  }
+  entries.push_back({"documentation/licenses/ehpt.txt",
+                     "ehpt, BSD-3-Clause: the LICENSE file of its source and of /usr/share/doc/ehpt/copyright.\n"
+                     "The data under resources/ keep their own notices (data/README.md of ehpt).\n"});
+
+  // the token: a digest of everything in the FMU but its description, which carries it
+  std::string digest_input;
+  for (const io::ZipEntry& e : entries) digest_input += e.name + '\0' + io::sha256_hex(e.data) + '\n';
+  for (const std::string& s : sets) digest_input += "set " + s + '\n';
+  const std::string token = "{" + io::sha256_hex(digest_input).substr(0, 32) + "}";
+  std::string manifest = "# ehpt fmu 1\ntoken " + token + "\nscenario " + scenario_rel + "\n";
+  for (const std::string& s : sets) manifest += "set " + s + "\n";
+  entries.push_back({std::string("resources/") + fmu::kManifestName, manifest});
+
+  const fmu::Description d = fmu::describe(sc);
+  const std::string tool = "ehpt " + std::string(hil::build_info().version);
+  entries.insert(entries.begin(), io::ZipEntry{"modelDescription.xml", fmu::model_description_3(d, id, token, tool)});
+  entries.push_back({"documentation/index.html", documentation_page(d, id)});
+
+  std::string archive;
+  if (!io::zip_store(entries, archive, error)) {
+    std::cerr << "error: " << error << "\n";
+    return 1;
+  }
+  const fs::path parent = fs::path(out_path).parent_path();
+  if (!parent.empty()) fs::create_directories(parent, ec);
+  if (!io::write_file_atomically(out_path, archive, error)) {
+    std::cerr << "error: " << error << "\n";
+    return 1;
+  }
+  std::size_t outputs = 0;
+  for (const fmu::Variable& v : d.variables) outputs += v.causality == fmu::Causality::kOutput ? 1 : 0;
+  return out("fmu           " + out_path + ": FMI 3.0 co-simulation, modelIdentifier " + id + ", " +
+             std::to_string(outputs) + " outputs, step " + io::number_text(d.step_s) + " s, stop " +
+             io::number_text(d.stop_s) + " s, " + std::to_string(entries.size()) + " files, " +
+             std::to_string(archive.size()) + " bytes\n")
+             ? 0
+             : 1;
+}
+
+}  // namespace ehpt::cli

@@ -1,0 +1,284 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The FMI 3.0 co-simulation functions of an ehpt FMU (io/fmi/fmi3_api.h), each a thin map onto
+// targets/fmu/fmu_instance.hpp. Every function of the API is exported, as importers look them
+// all up; what this FMU does not offer (Float32 and the integer types, clocks, FMU state,
+// derivatives, Event Mode, Scheduled Execution) answers fmi3Error with a message saying so.
+// Nothing throws across the C boundary: an exception becomes fmi3Fatal with its text.
+
+#include <cstring>
+#include <exception>
+#include <memory>
+#include <new>
+#include <string>
+
+#include "io/fmi/fmi3_api.h"
+#include "targets/fmu/fmu_instance.hpp"
+
+namespace {
+
+struct Fmu3 {
+  std::string name;
+  fmi3InstanceEnvironment environment = nullptr;
+  fmi3LogMessageCallback log_message = nullptr;
+  bool logging_on = false;
+  std::unique_ptr<ehpt::fmu::Instance> instance;
+};
+
+// Errors and warnings always reach the importer's logger (if it gave one); the rest only with
+// debug logging on.
+void write_log(void* context, int status, const char* category, const char* message) {
+  auto* f = static_cast<Fmu3*>(context);
+  if (f == nullptr || f->log_message == nullptr || (status == fmi3OK && !f->logging_on)) return;
+  const std::string text = f->name + ": " + message;
+  f->log_message(f->environment, static_cast<fmi3Status>(status), category, text.c_str());
+}
+
+fmi3Status refuse(fmi3Instance instance, const char* what) {
+  write_log(instance, fmi3Error, "logStatusError", what);
+  return fmi3Error;
+}
+
+// Runs body; an exception escaping it is fmi3Fatal (with its text), never a crash.
+template <class Body>
+fmi3Status guarded(fmi3Instance instance, Body&& body) {
+  if (instance == nullptr) return fmi3Error;
+  try {
+    return body(*static_cast<Fmu3*>(instance));
+  } catch (const std::exception& e) {
+    write_log(instance, fmi3Fatal, "logStatusFatal", e.what());
+  } catch (...) {
+    write_log(instance, fmi3Fatal, "logStatusFatal", "an unknown exception");
+  }
+  return fmi3Fatal;
+}
+
+fmi3Status ok(bool b) { return b ? fmi3OK : fmi3Error; }
+
+}  // namespace
+
+extern "C" {
+
+const char* fmi3GetVersion(void) { return fmi3Version; }
+
+fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, size_t, const fmi3String[]) {
+  return guarded(instance, [&](Fmu3& f) {
+    f.logging_on = loggingOn;
+    return fmi3OK;
+  });
+}
+
+fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String instantiationToken, fmi3String resourcePath,
+                                         fmi3Boolean, fmi3Boolean loggingOn, fmi3Boolean eventModeUsed,
+                                         fmi3Boolean, const fmi3ValueReference[], size_t nRequiredIntermediateVariables,
+                                         fmi3InstanceEnvironment instanceEnvironment, fmi3LogMessageCallback logMessage,
+                                         fmi3IntermediateUpdateCallback) {
+  std::unique_ptr<Fmu3> owned;  // outside the try: the catch may still log through it
+  Fmu3* f = nullptr;
+  try {
+    owned = std::make_unique<Fmu3>();
+    f = owned.get();
+    f->name = instanceName != nullptr && instanceName[0] != '\0' ? instanceName : "ehpt";
+    f->environment = instanceEnvironment;
+    f->log_message = logMessage;
+    f->logging_on = loggingOn;
+    if (eventModeUsed) {
+      write_log(f, fmi3Error, "logStatusError", "eventModeUsed = true: this FMU has no Event Mode (hasEventMode = false)");
+      return nullptr;
+    }
+    if (nRequiredIntermediateVariables > 0) {
+      write_log(f, fmi3Error, "logStatusError",
+                "requiredIntermediateVariables given: this FMU provides no intermediate update");
+      return nullptr;
+    }
+    if (instantiationToken == nullptr || resourcePath == nullptr) {
+      write_log(f, fmi3Error, "logStatusError", "instantiationToken and resourcePath are required");
+      return nullptr;
+    }
+    f->instance = ehpt::fmu::Instance::make(resourcePath, instantiationToken, ehpt::fmu::Log{write_log, f});
+    if (!f->instance) return nullptr;
+    return owned.release();
+  } catch (const std::exception& e) {
+    if (f != nullptr) write_log(f, fmi3Fatal, "logStatusFatal", e.what());
+  } catch (...) {
+  }
+  return nullptr;
+}
+
+void fmi3FreeInstance(fmi3Instance instance) { delete static_cast<Fmu3*>(instance); }
+
+fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean, fmi3Float64, fmi3Float64 startTime,
+                                       fmi3Boolean stopTimeDefined, fmi3Float64 stopTime) {
+  return guarded(instance, [&](Fmu3& f) { return ok(f.instance->enter_initialization(stopTimeDefined, startTime, stopTime)); });
+}
+
+fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
+  return guarded(instance, [&](Fmu3& f) { return ok(f.instance->exit_initialization()); });
+}
+
+fmi3Status fmi3EnterEventMode(fmi3Instance instance) {
+  return refuse(instance, "fmi3EnterEventMode: this FMU has no Event Mode (hasEventMode = false)");
+}
+
+fmi3Status fmi3Terminate(fmi3Instance instance) {
+  return guarded(instance, [&](Fmu3& f) { return ok(f.instance->terminate()); });
+}
+
+fmi3Status fmi3Reset(fmi3Instance instance) {
+  return guarded(instance, [&](Fmu3& f) { return ok(f.instance->reset()); });
+}
+
+fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences,
+                          fmi3Float64 values[], size_t nValues) {
+  return guarded(instance,
+                 [&](Fmu3& f) { return ok(f.instance->get_float64(valueReferences, nValueReferences, values, nValues)); });
+}
+
+fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference[], size_t nValueReferences, const fmi3Float64[],
+                          size_t) {
+  if (nValueReferences == 0) return instance != nullptr ? fmi3OK : fmi3Error;
+  return refuse(instance, "fmi3SetFloat64: every variable of this FMU is an output (no input or parameter to set)");
+}
+
+// The types this FMU has no variable of: a call with references is an error that says so.
+#define EHPT_NO_VARIABLES_OF(TYPE, CONST)                                                                        \
+  fmi3Status fmi3Get##TYPE(fmi3Instance instance, const fmi3ValueReference[], size_t n, fmi3##TYPE[], size_t) {   \
+    if (n == 0) return instance != nullptr ? fmi3OK : fmi3Error;                                                 \
+    return refuse(instance, "fmi3Get" #TYPE ": this FMU has no " #TYPE " variable (every variable is Float64)"); \
+  }                                                                                                              \
+  fmi3Status fmi3Set##TYPE(fmi3Instance instance, const fmi3ValueReference[], size_t n, CONST fmi3##TYPE[], size_t) { \
+    if (n == 0) return instance != nullptr ? fmi3OK : fmi3Error;                                                 \
+    return refuse(instance, "fmi3Set" #TYPE ": this FMU has no " #TYPE " variable (every variable is Float64)"); \
+  }
+EHPT_NO_VARIABLES_OF(Float32, const)
+EHPT_NO_VARIABLES_OF(Int8, const)
+EHPT_NO_VARIABLES_OF(UInt8, const)
+EHPT_NO_VARIABLES_OF(Int16, const)
+EHPT_NO_VARIABLES_OF(UInt16, const)
+EHPT_NO_VARIABLES_OF(Int32, const)
+EHPT_NO_VARIABLES_OF(UInt32, const)
+EHPT_NO_VARIABLES_OF(Int64, const)
+EHPT_NO_VARIABLES_OF(UInt64, const)
+EHPT_NO_VARIABLES_OF(Boolean, const)
+EHPT_NO_VARIABLES_OF(String, const)
+#undef EHPT_NO_VARIABLES_OF
+
+fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference[], size_t n, size_t[], fmi3Binary[], size_t) {
+  if (n == 0) return instance != nullptr ? fmi3OK : fmi3Error;
+  return refuse(instance, "fmi3GetBinary: this FMU has no Binary variable");
+}
+fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference[], size_t n, const size_t[], const fmi3Binary[],
+                         size_t) {
+  if (n == 0) return instance != nullptr ? fmi3OK : fmi3Error;
+  return refuse(instance, "fmi3SetBinary: this FMU has no Binary variable");
+}
+fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference[], size_t, fmi3Clock[]) {
+  return refuse(instance, "fmi3GetClock: this FMU has no clock");
+}
+fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference[], size_t, const fmi3Clock[]) {
+  return refuse(instance, "fmi3SetClock: this FMU has no clock");
+}
+
+fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance instance, fmi3ValueReference, size_t*) {
+  return refuse(instance, "fmi3GetNumberOfVariableDependencies: not provided (the outputs depend on the state alone)");
+}
+fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference, size_t[], fmi3ValueReference[], size_t[],
+                                       fmi3DependencyKind[], size_t) {
+  return refuse(instance, "fmi3GetVariableDependencies: not provided");
+}
+
+fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState*) {
+  return refuse(instance, "fmi3GetFMUState: not provided (canGetAndSetFMUState = false)");
+}
+fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState) {
+  return refuse(instance, "fmi3SetFMUState: not provided (canGetAndSetFMUState = false)");
+}
+fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState*) {
+  return refuse(instance, "fmi3FreeFMUState: not provided (canGetAndSetFMUState = false)");
+}
+fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState, size_t*) {
+  return refuse(instance, "fmi3SerializedFMUStateSize: not provided (canSerializeFMUState = false)");
+}
+fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState, fmi3Byte[], size_t) {
+  return refuse(instance, "fmi3SerializeFMUState: not provided (canSerializeFMUState = false)");
+}
+fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte[], size_t, fmi3FMUState*) {
+  return refuse(instance, "fmi3DeserializeFMUState: not provided (canSerializeFMUState = false)");
+}
+
+fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueReference[], size_t, const fmi3ValueReference[],
+                                        size_t, const fmi3Float64[], size_t, fmi3Float64[], size_t) {
+  return refuse(instance, "fmi3GetDirectionalDerivative: not provided (providesDirectionalDerivatives = false)");
+}
+fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueReference[], size_t, const fmi3ValueReference[],
+                                    size_t, const fmi3Float64[], size_t, fmi3Float64[], size_t) {
+  return refuse(instance, "fmi3GetAdjointDerivative: not provided (providesAdjointDerivatives = false)");
+}
+
+fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance) {
+  return refuse(instance, "fmi3EnterConfigurationMode: this FMU has no structural parameter");
+}
+fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance) {
+  return refuse(instance, "fmi3ExitConfigurationMode: this FMU has no structural parameter");
+}
+
+fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference[], size_t, fmi3Float64[],
+                                  fmi3IntervalQualifier[]) {
+  return refuse(instance, "fmi3GetIntervalDecimal: this FMU has no clock");
+}
+fmi3Status fmi3GetIntervalFraction(fmi3Instance instance, const fmi3ValueReference[], size_t, fmi3UInt64[], fmi3UInt64[],
+                                   fmi3IntervalQualifier[]) {
+  return refuse(instance, "fmi3GetIntervalFraction: this FMU has no clock");
+}
+fmi3Status fmi3GetShiftDecimal(fmi3Instance instance, const fmi3ValueReference[], size_t, fmi3Float64[]) {
+  return refuse(instance, "fmi3GetShiftDecimal: this FMU has no clock");
+}
+fmi3Status fmi3GetShiftFraction(fmi3Instance instance, const fmi3ValueReference[], size_t, fmi3UInt64[], fmi3UInt64[]) {
+  return refuse(instance, "fmi3GetShiftFraction: this FMU has no clock");
+}
+fmi3Status fmi3SetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference[], size_t, const fmi3Float64[]) {
+  return refuse(instance, "fmi3SetIntervalDecimal: this FMU has no clock");
+}
+fmi3Status fmi3SetIntervalFraction(fmi3Instance instance, const fmi3ValueReference[], size_t, const fmi3UInt64[],
+                                   const fmi3UInt64[]) {
+  return refuse(instance, "fmi3SetIntervalFraction: this FMU has no clock");
+}
+fmi3Status fmi3SetShiftDecimal(fmi3Instance instance, const fmi3ValueReference[], size_t, const fmi3Float64[]) {
+  return refuse(instance, "fmi3SetShiftDecimal: this FMU has no clock");
+}
+fmi3Status fmi3SetShiftFraction(fmi3Instance instance, const fmi3ValueReference[], size_t, const fmi3UInt64[],
+                                const fmi3UInt64[]) {
+  return refuse(instance, "fmi3SetShiftFraction: this FMU has no clock");
+}
+
+fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance) {
+  return refuse(instance, "fmi3EvaluateDiscreteStates: this FMU has no Event Mode");
+}
+fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean*, fmi3Boolean*, fmi3Boolean*, fmi3Boolean*,
+                                    fmi3Boolean*, fmi3Float64*) {
+  return refuse(instance, "fmi3UpdateDiscreteStates: this FMU has no Event Mode");
+}
+fmi3Status fmi3EnterStepMode(fmi3Instance instance) {
+  return refuse(instance, "fmi3EnterStepMode: this FMU has no Event Mode (Step Mode follows initialization)");
+}
+fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueReference[], size_t, const fmi3Int32[],
+                                    fmi3Float64[], size_t) {
+  return refuse(instance, "fmi3GetOutputDerivatives: not provided (maxOutputDerivativeOrder = 0)");
+}
+
+fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoint, fmi3Float64 communicationStepSize,
+                      fmi3Boolean, fmi3Boolean* eventHandlingNeeded, fmi3Boolean* terminateSimulation,
+                      fmi3Boolean* earlyReturn, fmi3Float64* lastSuccessfulTime) {
+  return guarded(instance, [&](Fmu3& f) {
+    double reached = 0.0;
+    bool stopped = false;
+    const bool done = f.instance->do_step(currentCommunicationPoint, communicationStepSize, reached, stopped);
+    if (eventHandlingNeeded != nullptr) *eventHandlingNeeded = fmi3False;
+    if (earlyReturn != nullptr) *earlyReturn = fmi3False;
+    if (terminateSimulation != nullptr) *terminateSimulation = stopped ? fmi3True : fmi3False;
+    if (lastSuccessfulTime != nullptr) *lastSuccessfulTime = reached;
+    if (!done) return fmi3Error;
+    return stopped ? fmi3Discard : fmi3OK;
+  });
+}
+
+}  // extern "C"

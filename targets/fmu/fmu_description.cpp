@@ -1,0 +1,145 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "targets/fmu/fmu_description.hpp"
+
+#include <cstdio>
+#include <map>
+
+#include "hil/run/simulation.hpp"
+#include "io/junit.hpp"  // xml_escape
+
+namespace ehpt::fmu {
+
+namespace {
+
+struct UnitRow {
+  const char* suffix;
+  const char* unit;
+  // SI base-unit exponents kg, m, s, A (what the signals use), and a factor to SI
+  int kg, m, s, A;
+  double factor;
+};
+
+// Longest suffix first: _g_kWh before _kWh before _h ...
+constexpr UnitRow kUnits[] = {
+    {"_g_kWh", "g/(kW.h)", 0, -2, 2, 0, 1e-3 / 3.6e6},
+    {"_rad_s", "rad/s", 0, 0, -1, 0, 1.0},
+    {"_m_s2", "m/s2", 0, 1, -2, 0, 1.0},
+    {"_m_s", "m/s", 0, 1, -1, 0, 1.0},
+    {"_g_s", "g/s", 1, 0, -1, 0, 1e-3},
+    {"_kmh", "km/h", 0, 1, -1, 0, 1.0 / 3.6},
+    {"_Nm", "N.m", 1, 2, -2, 0, 1.0},
+    {"_rad", "rad", 0, 0, 0, 0, 1.0},
+    {"_Wh", "W.h", 1, 2, -2, 0, 3600.0},
+    {"_W", "W", 1, 2, -3, 0, 1.0},
+    {"_V", "V", 1, 2, -3, -1, 1.0},
+    {"_A", "A", 0, 0, 0, 1, 1.0},
+    {"_J", "J", 1, 2, -2, 0, 1.0},
+    {"_N", "N", 1, 1, -2, 0, 1.0},
+    {"_m", "m", 0, 1, 0, 0, 1.0},
+    {"_s", "s", 0, 0, 1, 0, 1.0},
+    {"_g", "g", 1, 0, 0, 0, 1e-3},
+};
+
+const UnitRow* unit_row(std::string_view name) {
+  for (const UnitRow& u : kUnits) {
+    const std::string_view sfx = u.suffix;
+    if (name.size() > sfx.size() && name.substr(name.size() - sfx.size()) == sfx) return &u;
+  }
+  return nullptr;
+}
+
+std::string number(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+}  // namespace
+
+std::string unit_of(std::string_view signal_name) {
+  const UnitRow* u = unit_row(signal_name);
+  return u != nullptr ? u->unit : "";
+}
+
+Description describe(const hil::Scenario& sc) {
+  Description d;
+  d.model_name = sc.name;
+  d.description = sc.description;
+  d.step_s = sc.solver.step_s;
+  d.stop_s = static_cast<double>(sc.solver.steps) * sc.solver.step_s;
+  Variable time;
+  time.vr = 0;
+  time.name = "time";
+  time.unit = "s";
+  time.description = "simulation time";
+  time.causality = Causality::kIndependent;
+  d.variables.push_back(time);
+  const std::vector<hil::SignalInfo> signals = hil::scenario_signals(sc);
+  std::uint32_t vr = 1;
+  for (std::size_t i = 0; i < signals.size(); ++i) {
+    if (signals[i].name == "time_s") continue;  // FMI's independent variable
+    Variable v;
+    v.vr = vr++;
+    v.name = std::string(signals[i].name);
+    v.unit = unit_of(signals[i].name);
+    v.description = std::string(signals[i].meaning);
+    v.signal = static_cast<int>(i);
+    d.variables.push_back(v);
+  }
+  return d;
+}
+
+std::string model_description_3(const Description& d, const std::string& model_identifier, const std::string& token,
+                                const std::string& generation_tool) {
+  using io::xml_escape;
+  std::string x = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
+  x += "<fmiModelDescription fmiVersion=\"3.0\" modelName=\"" + xml_escape(d.model_name) + "\" instantiationToken=\"" +
+       xml_escape(token) + "\" description=\"" + xml_escape(d.description) + "\" generationTool=\"" +
+       xml_escape(generation_tool) + "\" variableNamingConvention=\"flat\">\n";
+  // no early return, no intermediate update, no event mode: what the SIL Kit importer accepts
+  x += "  <CoSimulation modelIdentifier=\"" + xml_escape(model_identifier) +
+       "\" canHandleVariableCommunicationStepSize=\"true\" fixedInternalStepSize=\"" + number(d.step_s) +
+       "\" canBeInstantiatedOnlyOncePerProcess=\"false\" canGetAndSetFMUState=\"false\" canSerializeFMUState=\"false\""
+       " providesIntermediateUpdate=\"false\" mightReturnEarlyFromDoStep=\"false\""
+       " canReturnEarlyAfterIntermediateUpdate=\"false\" hasEventMode=\"false\"/>\n";
+  std::map<std::string, const UnitRow*> units;
+  for (const Variable& v : d.variables) {
+    if (v.unit.empty()) continue;
+    for (const UnitRow& u : kUnits) {
+      if (v.unit == u.unit) units.emplace(v.unit, &u);
+    }
+  }
+  if (!units.empty()) {
+    x += "  <UnitDefinitions>\n";
+    for (const auto& [name, u] : units) {
+      x += "    <Unit name=\"" + xml_escape(name) + "\"><BaseUnit";
+      if (u->kg != 0) x += " kg=\"" + std::to_string(u->kg) + "\"";
+      if (u->m != 0) x += " m=\"" + std::to_string(u->m) + "\"";
+      if (u->s != 0) x += " s=\"" + std::to_string(u->s) + "\"";
+      if (u->A != 0) x += " A=\"" + std::to_string(u->A) + "\"";
+      if (name == "rad" || name == "rad/s") x += " rad=\"1\"";
+      if (u->factor != 1.0) x += " factor=\"" + number(u->factor) + "\"";
+      x += "/></Unit>\n";
+    }
+    x += "  </UnitDefinitions>\n";
+  }
+  x += "  <DefaultExperiment startTime=\"0\" stopTime=\"" + number(d.stop_s) + "\" stepSize=\"" + number(d.step_s) +
+       "\"/>\n";
+  x += "  <ModelVariables>\n";
+  for (const Variable& v : d.variables) {
+    x += "    <Float64 name=\"" + xml_escape(v.name) + "\" valueReference=\"" + std::to_string(v.vr) + "\"";
+    if (!v.description.empty()) x += " description=\"" + xml_escape(v.description) + "\"";
+    x += v.causality == Causality::kIndependent ? " causality=\"independent\" variability=\"continuous\""
+                                                : " causality=\"output\" variability=\"continuous\"";
+    if (!v.unit.empty()) x += " unit=\"" + xml_escape(v.unit) + "\"";
+    x += "/>\n";
+  }
+  x += "  </ModelVariables>\n  <ModelStructure>\n";
+  for (const Variable& v : d.variables) {
+    if (v.causality == Causality::kOutput) x += "    <Output valueReference=\"" + std::to_string(v.vr) + "\"/>\n";
+  }
+  x += "  </ModelStructure>\n</fmiModelDescription>\n";
+  return x;
+}
+
+}  // namespace ehpt::fmu

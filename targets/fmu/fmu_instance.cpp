@@ -1,0 +1,207 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "targets/fmu/fmu_instance.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "hil/run/batch.hpp"  // fault_text
+#include "io/number_format.hpp"
+
+namespace ehpt::fmu {
+
+namespace {
+
+constexpr int kOk = 0, kError = 3;
+// the steps one run() of the runner may take (its row buffer); a longer doStep loops
+constexpr std::int64_t kChunkSteps = 100000;
+
+std::string trimmed(std::string s) {
+  while (!s.empty() && (s.back() == '\r' || s.back() == ' ')) s.pop_back();
+  return s;
+}
+
+}  // namespace
+
+Instance::Instance(hil::Scenario sc, std::string scenario_path, std::vector<std::string> sets, Log log)
+    : sc_(std::move(sc)),
+      scenario_path_(std::move(scenario_path)),
+      sets_(std::move(sets)),
+      log_(log),
+      description_(describe(sc_)) {
+  outputs_.assign(description_.variables.size(), 0.0);
+}
+
+std::unique_ptr<Instance> Instance::make(const std::string& resource_dir, const std::string& token, Log log) {
+  std::string dir = resource_dir;
+  if (!dir.empty() && dir.back() != '/') dir += '/';
+  const std::string manifest = dir + kManifestName;
+  std::ifstream in(manifest);
+  if (!in) {
+    log(kError, "logStatusError", manifest + ": cannot read it (is resourcePath this FMU's resources folder?)");
+    return nullptr;
+  }
+  std::string line, own_token, scenario;
+  std::vector<std::string> sets;
+  while (std::getline(in, line)) {
+    line = trimmed(line);
+    if (line.rfind("token ", 0) == 0) own_token = line.substr(6);
+    if (line.rfind("scenario ", 0) == 0) scenario = line.substr(9);
+    if (line.rfind("set ", 0) == 0) sets.push_back(line.substr(4));
+  }
+  if (own_token.empty() || scenario.empty()) {
+    log(kError, "logStatusError", manifest + ": no 'token' or 'scenario' line (the FMU is damaged)");
+    return nullptr;
+  }
+  if (token != own_token) {
+    log(kError, "logStatusError",
+        "instantiationToken \"" + token + "\" is not this FMU's (\"" + own_token +
+            "\"): the modelDescription.xml and the resources are of different FMUs");
+    return nullptr;
+  }
+  hil::Scenario sc;
+  std::vector<std::string> errors;
+  if (!hil::load_scenario(dir + scenario, sets, sc, errors)) {
+    for (const std::string& e : errors) log(kError, "logStatusError", e);
+    return nullptr;
+  }
+  return std::unique_ptr<Instance>(new Instance(std::move(sc), dir + scenario, std::move(sets), log));
+}
+
+bool Instance::fail(const std::string& message) {
+  log_(kError, "logStatusError", message);
+  state_ = State::kError;
+  return false;
+}
+
+bool Instance::in(State s, const char* call) {
+  if (state_ == s) return true;
+  static const char* const names[] = {"Instantiated", "Initialization Mode", "Step Mode", "Terminated", "an error"};
+  return fail(std::string(call) + " called in " + names[static_cast<int>(state_)] + " (FMI's calling sequence)");
+}
+
+bool Instance::enter_initialization(bool stop_defined, double start_s, double stop_s) {
+  if (!in(State::kInstantiated, "fmi3EnterInitializationMode")) return false;
+  if (!std::isfinite(start_s) || start_s != 0.0) {
+    return fail("startTime = " + io::number_text(start_s) + ": an ehpt FMU starts at 0 s (its cycle's start)");
+  }
+  stop_s_ = description_.stop_s;
+  if (stop_defined) {
+    if (!std::isfinite(stop_s) || stop_s <= 0.0) return fail("stopTime = " + io::number_text(stop_s) + ": must be > 0 s");
+    if (stop_s != stop_s_) {  // the scenario again, with the importer's stop time
+      std::vector<std::string> errors;
+      hil::Scenario sc;
+      std::vector<std::string> sets = sets_;
+      sets.push_back("solver.duration_s=" + io::number_text(stop_s));
+      if (!hil::load_scenario(scenario_path_, sets, sc, errors)) {
+        for (const std::string& e : errors) log_(kError, "logStatusError", e);
+        return fail("stopTime = " + io::number_text(stop_s) + ": the scenario does not load with it");
+      }
+      sc_ = std::move(sc);
+      stop_s_ = static_cast<double>(sc_.solver.steps) * sc_.solver.step_s;
+    }
+  }
+  state_ = State::kInitialization;
+  return true;
+}
+
+bool Instance::exit_initialization() {
+  if (!in(State::kInitialization, "fmi3ExitInitializationMode")) return false;
+  hil::SimulationOptions opt;
+  opt.columns = {0};  // the runner records time only: the FMU's outputs are read at each point
+  opt.chunk_steps = kChunkSteps;
+  sim_ = hil::make_simulation(sc_, opt);
+  if (!sim_) return fail(sc_.name + ": the simulation cannot be built");
+  const std::span<const double> y = sim_->outputs();
+  for (const Variable& v : description_.variables) {
+    if (v.signal >= 0) outputs_[v.vr] = y[static_cast<std::size_t>(v.signal)];
+  }
+  state_ = State::kStep;
+  return true;
+}
+
+bool Instance::do_step(double current_s, double step_s, double& reached_s, bool& stopped) {
+  stopped = false;
+  if (!in(State::kStep, "fmi3DoStep")) return false;
+  const double h = sc_.solver.step_s;
+  const double now_s = sim_->time_s();
+  reached_s = now_s;
+  // the importer's grid must be the plant's: whole steps, within a small tolerance
+  if (!std::isfinite(current_s) || std::abs(current_s - now_s) > 1e-9 * std::max(1.0, std::abs(now_s))) {
+    return fail("fmi3DoStep: currentCommunicationPoint = " + io::number_text(current_s) + " s, but the FMU is at " +
+                io::number_text(now_s) + " s");
+  }
+  if (!std::isfinite(step_s) || step_s <= 0.0) {
+    return fail("fmi3DoStep: communicationStepSize = " + io::number_text(step_s) + ": must be > 0");
+  }
+  const double steps = step_s / h;
+  const double whole = std::nearbyint(steps);
+  if (whole < 1.0 || std::abs(steps - whole) > 1e-6 || whole > 9.0e15) {
+    return fail("fmi3DoStep: communicationStepSize = " + io::number_text(step_s) + " s is not a whole number of plant steps (" +
+                io::number_text(h) + " s, fixedInternalStepSize): use a multiple of it");
+  }
+  const std::int64_t n = static_cast<std::int64_t>(whole);
+  if (n > sim_->total_steps() - sim_->step_index()) {
+    return fail("fmi3DoStep: to " + io::number_text(now_s + step_s) + " s, past the stop time " + io::number_text(stop_s_) +
+                " s (set stopTime in fmi3EnterInitializationMode)");
+  }
+  std::int64_t left = n;
+  while (left > 0 && !sim_->finished()) {
+    const std::int64_t k = sim_->step(std::min(left, kChunkSteps));
+    sim_->clear_rows();
+    if (k <= 0) break;
+    left -= k;
+  }
+  const std::span<const double> y = sim_->outputs();
+  for (const Variable& v : description_.variables) {
+    if (v.signal >= 0) outputs_[v.vr] = y[static_cast<std::size_t>(v.signal)];
+  }
+  reached_s = sim_->time_s();
+  if (left > 0) {  // the plant stopped on a fault (FaultPolicy::kStop), as ehpt run does
+    stopped = true;
+    state_ = State::kTerminated;
+    log_(2, "logStatusDiscard",
+         sc_.name + ": the plant stopped on a fault at t = " + io::number_text(sim_->stats().fault_time_s) + " s: " +
+             hil::fault_text(sim_->stats().fault) + " (the output 'fault' has its bits)");
+  }
+  return true;
+}
+
+bool Instance::get_float64(const std::uint32_t* vrs, std::size_t n, double* values, std::size_t n_values) {
+  if (state_ == State::kError) return false;
+  if (n != n_values || (n > 0 && (vrs == nullptr || values == nullptr))) {
+    return fail("fmi3GetFloat64: " + std::to_string(n) + " value references but room for " + std::to_string(n_values) +
+                " values (every variable is a scalar)");
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (vrs[i] >= outputs_.size()) {
+      return fail("fmi3GetFloat64: value reference " + std::to_string(vrs[i]) + " is not one of this FMU's (0 .. " +
+                  std::to_string(outputs_.size() - 1) + ")");
+    }
+    values[i] = vrs[i] == 0 ? (sim_ ? sim_->time_s() : 0.0) : outputs_[vrs[i]];
+  }
+  return true;
+}
+
+bool Instance::terminate() {
+  if (state_ != State::kStep && state_ != State::kInitialization) return in(State::kStep, "fmi3Terminate");
+  state_ = State::kTerminated;
+  return true;
+}
+
+bool Instance::reset() {
+  sim_.reset();
+  std::vector<std::string> errors;
+  hil::Scenario sc;
+  if (!hil::load_scenario(scenario_path_, sets_, sc, errors)) {
+    for (const std::string& e : errors) log_(kError, "logStatusError", e);
+    return fail("fmi3Reset: the scenario no longer loads");
+  }
+  sc_ = std::move(sc);
+  std::fill(outputs_.begin(), outputs_.end(), 0.0);
+  state_ = State::kInstantiated;
+  (void)kOk;
+  return true;
+}
+
+}  // namespace ehpt::fmu

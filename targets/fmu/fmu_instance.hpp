@@ -1,0 +1,72 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+// One instance of an ehpt FMU, without FMI's C types (targets/fmu/fmi3_export.cpp maps the
+// calls): the scenario in the FMU's resources/ loaded at instantiation (may allocate; its
+// problems logged with the same messages as `ehpt run`), the simulation built when
+// initialization ends, then doStep: whole plant steps of the same runner `ehpt run` uses,
+// nothing allocated. Several instances in one process share nothing.
+//
+// The FMU's resources/ehpt-fmu.txt says which scenario it is and its token:
+//   # ehpt fmu 1
+//   token <the instantiationToken of modelDescription.xml>
+//   scenario <its path inside resources/>
+//   set <key=value>            (each `ehpt fmu --set`, in order)
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "hil/config/config.hpp"
+#include "hil/run/simulation.hpp"
+#include "targets/fmu/fmu_description.hpp"
+
+namespace ehpt::fmu {
+
+inline constexpr const char* kManifestName = "ehpt-fmu.txt";
+
+// How the instance reports (FMI's status words: 0 OK, 1 Warning, 2 Discard, 3 Error, 4 Fatal).
+struct Log {
+  void (*write)(void* context, int status, const char* category, const char* message) = nullptr;
+  void* context = nullptr;
+  void operator()(int status, const char* category, const std::string& message) const {
+    if (write != nullptr) write(context, status, category, message.c_str());
+  }
+};
+
+class Instance {
+ public:
+  // nullptr if the resources do not hold a loadable scenario or the token is not theirs (logged).
+  static std::unique_ptr<Instance> make(const std::string& resource_dir, const std::string& token, Log log);
+
+  // The calling sequence (FMI 3.0 co-simulation, §4): each false is logged, and the instance is
+  // then in error (every later call but free fails).
+  bool enter_initialization(bool stop_defined, double start_s, double stop_s);
+  bool exit_initialization();
+  // stopped: the plant stopped on a fault before the step's end (reached_s says where; logged;
+  // FMI: fmi3Discard with terminateSimulation), as `ehpt run` ends with exit 3
+  bool do_step(double current_s, double step_s, double& reached_s, bool& stopped);
+  bool get_float64(const std::uint32_t* vrs, std::size_t n, double* values, std::size_t n_values);
+  bool terminate();
+  bool reset();
+
+  const Description& description() const { return description_; }
+
+ private:
+  enum class State { kInstantiated, kInitialization, kStep, kTerminated, kError };
+  Instance(hil::Scenario sc, std::string scenario_path, std::vector<std::string> sets, Log log);
+  bool fail(const std::string& message);
+  bool in(State s, const char* call);
+
+  hil::Scenario sc_;
+  std::string scenario_path_;  // reloaded when the importer asks for another stop time
+  std::vector<std::string> sets_;  // the manifest's overrides
+  Log log_;
+  Description description_;
+  State state_ = State::kInstantiated;
+  double stop_s_ = 0.0;
+  std::unique_ptr<hil::Simulation> sim_;
+  std::vector<double> outputs_;  // the outputs at the current communication point, by value reference
+};
+
+}  // namespace ehpt::fmu

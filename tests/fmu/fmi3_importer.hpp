@@ -1,0 +1,59 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+// The project's FMI 3.0 co-simulation importer, written from the standard for the tests (no FMI
+// library exists in Debian): unpack an FMU (io/zip) into a folder of its own, read the
+// modelDescription.xml attributes an importer needs, dlopen binaries/x86_64-linux/<id>.so and
+// look up every function, then drive the calling sequence of FMI 3.0 §4.2: instantiate, enter
+// and exit initialization, doStep, get, terminate, free. Messages the FMU logs are kept.
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "io/fmi/fmi3_api.h"
+
+namespace ehpt::test {
+
+class Fmi3Fmu {
+ public:
+  ~Fmi3Fmu();
+  // Unpacks fmu_path into a new temporary folder (removed again by the destructor) and loads
+  // its library; false and why if any of it fails.
+  bool open(const std::string& fmu_path, std::string& error);
+
+  std::string dir;                         // where it is unpacked
+  std::string token, model_identifier;
+  double step_s = 0.0, stop_s = 0.0;       // fixedInternalStepSize, DefaultExperiment stopTime
+  std::map<std::string, fmi3ValueReference> vr;  // Float64 variables by name
+  std::vector<std::string> output_names;   // causality = "output", in document order
+
+  // every message the FMU logged through the callback: "STATUS CATEGORY: MESSAGE"
+  std::vector<std::string> log;
+
+  fmi3InstantiateCoSimulationTYPE* instantiate = nullptr;
+  fmi3FreeInstanceTYPE* free_instance = nullptr;
+  fmi3EnterInitializationModeTYPE* enter_initialization = nullptr;
+  fmi3ExitInitializationModeTYPE* exit_initialization = nullptr;
+  fmi3DoStepTYPE* do_step = nullptr;
+  fmi3GetFloat64TYPE* get_float64 = nullptr;
+  fmi3SetFloat64TYPE* set_float64 = nullptr;
+  fmi3TerminateTYPE* terminate = nullptr;
+  fmi3ResetTYPE* reset = nullptr;
+  fmi3GetVersionTYPE* get_version = nullptr;
+
+  // instantiate with this FMU's token and resources, the log callback collecting into `log`
+  fmi3Instance make_instance(const char* name, const char* token_override = nullptr);
+
+ private:
+  void* library_ = nullptr;
+  bool made_dir_ = false;
+};
+
+// Runs an instance from 0 to stop_s in communication steps of k plant steps; rows: the outputs
+// (output_names order) after each step, preceded by the time. false and why on any non-OK.
+bool run_fmu(Fmi3Fmu& fmu, fmi3Instance instance, std::int64_t k, double stop_s, std::vector<std::vector<double>>& rows,
+             std::string& error);
+
+}  // namespace ehpt::test

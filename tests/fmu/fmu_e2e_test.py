@@ -1,0 +1,184 @@
+#!/usr/bin/python3
+# SPDX-License-Identifier: BSD-3-Clause
+"""ehpt fmu end to end, with the project's importer (tests/fmu/fmu_run.cpp):
+
+    /usr/bin/python3 tests/fmu/fmu_e2e_test.py EHPT FMU_RUN SOURCE_DIR [clean]
+
+For every shipped scenario (every vehicle kind): `ehpt fmu` (2 s), then
+- modelDescription.xml is well formed (xmllint) and has what FMI 3.0 requires of it: fmiVersion,
+  a non-empty instantiationToken, CoSimulation with modelIdentifier whose library is in
+  binaries/x86_64-linux/, exactly one independent variable, valueReferences unique, causality
+  and variability from the standard's sets, every unit declared in UnitDefinitions, the
+  ModelStructure's Outputs exactly the output variables in order, a DefaultExperiment;
+- the FMU run by fmu_run in communication steps of 10 plant steps prints the rows of `ehpt run`'s
+  timeseries.csv (output.interval_s = 10 steps), character for character.
+With `clean`: one FMU run where nothing of ehpt is reachable: a mount namespace with an empty
+tmpfs over the source (and build) tree and over an installed /usr/share/ehpt, and the system's
+libtomlplusplus.so.3 hidden (the FMU's library has toml++ compiled in); the rows are again
+ehpt run's.
+77 (skipped) if this user cannot make a mount namespace.
+"""
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import xml.etree.ElementTree as ET
+import zipfile
+
+EHPT, FMU_RUN, SRC = (os.path.abspath(a) for a in sys.argv[1:4])
+CLEAN = len(sys.argv) > 4 and sys.argv[4] == "clean"
+failures = []
+
+
+def check(ok, what):
+    print(("ok    " if ok else "FAIL  ") + what)
+    if not ok:
+        failures.append(what)
+
+
+def ehpt(*args):
+    return subprocess.run([EHPT] + list(args), capture_output=True, text=True, timeout=300)
+
+
+def model_description_problems(fmu):
+    with zipfile.ZipFile(fmu) as z:
+        names = set(z.namelist())
+        md = z.read("modelDescription.xml")
+    problems = []
+    root = ET.fromstring(md)
+    if root.tag != "fmiModelDescription" or root.get("fmiVersion") != "3.0":
+        problems.append("root element / fmiVersion")
+    for a in ("modelName", "instantiationToken"):
+        if not root.get(a):
+            problems.append("fmiModelDescription without " + a)
+    cs = root.find("CoSimulation")
+    if cs is None or not cs.get("modelIdentifier"):
+        problems.append("no CoSimulation modelIdentifier")
+    elif "binaries/x86_64-linux/%s.so" % cs.get("modelIdentifier") not in names:
+        problems.append("no binaries/x86_64-linux/<modelIdentifier>.so")
+    units = {u.get("name") for u in root.iter("Unit")}
+    variables = list(root.find("ModelVariables"))
+    vrs = [v.get("valueReference") for v in variables]
+    if len(vrs) != len(set(vrs)) or any(r is None or not r.isdigit() for r in vrs):
+        problems.append("valueReferences not unique whole numbers")
+    if sum(v.get("causality") == "independent" for v in variables) != 1:
+        problems.append("not exactly one independent variable")
+    for v in variables:
+        if v.get("causality") not in ("parameter", "calculatedParameter", "input", "output", "local", "independent",
+                                      "structuralParameter"):
+            problems.append("%s: causality %s" % (v.get("name"), v.get("causality")))
+        if v.get("variability") not in ("constant", "fixed", "tunable", "discrete", "continuous"):
+            problems.append("%s: variability %s" % (v.get("name"), v.get("variability")))
+        if v.get("unit") and v.get("unit") not in units:
+            problems.append("%s: unit %s not declared" % (v.get("name"), v.get("unit")))
+        if v.get("causality") == "independent" and (v.get("variability") != "continuous" or v.get("start")):
+            problems.append("the independent variable must be continuous without start")
+    outputs = [v.get("valueReference") for v in variables if v.get("causality") == "output"]
+    listed = [o.get("valueReference") for o in root.find("ModelStructure").iter("Output")]
+    if outputs != listed:
+        problems.append("ModelStructure Outputs are not the output variables")
+    if root.find("DefaultExperiment") is None:
+        problems.append("no DefaultExperiment")
+    return problems, float(cs.get("fixedInternalStepSize")) if cs is not None else 0.0
+
+
+def project(lines, columns):
+    """The FMU's CSV lines cut to columns (a scenario's output.signals may record fewer)."""
+    if not lines or not columns:
+        return lines
+    header = lines[0].split(",")
+    if any(c not in header for c in columns):
+        return lines
+    at = [header.index(c) for c in columns]
+    return [",".join(line.split(",")[i] for i in at) for line in lines]
+
+
+def reference_rows(name, step, out):
+    r = ehpt("run", name, "--quiet", "--set", "solver.duration_s=2", "--set", "output.interval_s=%r" % (10 * step),
+             "--out", out)
+    if r.returncode not in (0, 3):
+        return None, r.stderr
+    with open(os.path.join(out, "timeseries.csv")) as f:
+        lines = f.read().splitlines()
+    return [lines[0]] + lines[2:], ""  # the header, then every row after t = 0
+
+
+with tempfile.TemporaryDirectory() as tmp:
+    names = [line.split()[0] for line in ehpt("list").stdout.splitlines() if line.strip()]
+    check(len(names) >= 30, "the shipped scenarios: %d" % len(names))
+    kinds = set()
+    psecu2 = None
+    for name in names:
+        fmu = os.path.join(tmp, name + ".fmu")
+        r = ehpt("fmu", name, "--set", "solver.duration_s=2", "--out", fmu)
+        if r.returncode != 0:
+            check(False, "%s: ehpt fmu (%d): %s" % (name, r.returncode, r.stderr[-300:]))
+            continue
+        with zipfile.ZipFile(fmu) as z:
+            md_path = os.path.join(tmp, name + ".xml")
+            with open(md_path, "wb") as f:
+                f.write(z.read("modelDescription.xml"))
+            vehicle = [n for n in z.namelist() if n.startswith("resources/vehicles/")]
+        kinds.update(vehicle)
+        lint = subprocess.run(["xmllint", "--noout", md_path], capture_output=True, text=True)
+        problems, step = model_description_problems(fmu)
+        check(lint.returncode == 0 and not problems, "%s: modelDescription.xml well formed and complete %s %s"
+              % (name, lint.stderr[-200:], problems))
+        want, err = reference_rows(name, step, os.path.join(tmp, "run_" + name))
+        got = subprocess.run([FMU_RUN, fmu, "10", "2"], capture_output=True, text=True, timeout=300)
+        rows = project(got.stdout.splitlines(), want[0].split(",") if want else [])
+        same = want is not None and rows == want
+        first = next((i for i, (a, b) in enumerate(zip(rows, want or [])) if a != b), None)
+        check(same, "%s: the FMU's rows are ehpt run's (%d rows)%s" % (
+            name, len(rows), "" if same else " first difference at row %s: %s | %s %s" % (
+                first, rows[first][:120] if first is not None else "", (want or [""])[first or 0][:120],
+                err + got.stderr[-300:])))
+        if name == "psecu2_nedc":
+            psecu2 = (fmu, want)
+    check(len(kinds) >= 10, "FMUs of %d vehicle files: %s" % (len(kinds), sorted(kinds)))
+
+    # what ehpt fmu refuses: a path that is there (left as it was), FMI 2.0, a bad --set
+    taken = os.path.join(tmp, "taken.fmu")
+    with open(taken, "w") as f:
+        f.write("mine")
+    r = ehpt("fmu", "psecu2_nedc", "--out", taken)
+    check(r.returncode == 2 and "is there already" in r.stderr and open(taken).read() == "mine",
+          "--out over an existing file: exit 2, the file untouched (%d): %s" % (r.returncode, r.stderr.strip()))
+    r = ehpt("fmu", "psecu2_nedc", "--fmi", "2", "--out", os.path.join(tmp, "two.fmu"))
+    check(r.returncode == 2 and "FMI 2.0 is not built yet" in r.stderr and not os.path.exists(os.path.join(tmp, "two.fmu")),
+          "--fmi 2: exit 2, nothing written (%d): %s" % (r.returncode, r.stderr.strip()))
+    r = ehpt("fmu", "psecu2_nedc", "--set", "vehicle.vehicle.mass_kg=-5", "--out", os.path.join(tmp, "bad.fmu"))
+    check(r.returncode == 2 and "mass_kg" in r.stderr and not os.path.exists(os.path.join(tmp, "bad.fmu")),
+          "a bad --set: exit 2 with the load message, nothing written (%d): %s" % (r.returncode, r.stderr.strip()[-200:]))
+
+    if CLEAN and psecu2 is not None:
+        # a machine without ehpt: copy the importer and the FMU out, hide the trees and the library
+        box = tempfile.mkdtemp(dir="/tmp", prefix="ehpt-fmu-clean-")
+        try:
+            shutil.copy(FMU_RUN, os.path.join(box, "fmu_run"))
+            shutil.copy(psecu2[0], os.path.join(box, "p.fmu"))
+            hide = ["mount -t tmpfs none '%s'" % SRC]
+            build = os.path.dirname(os.path.dirname(FMU_RUN))
+            if not build.startswith(SRC + "/"):
+                hide.append("mount -t tmpfs none '%s'" % build)
+            if os.path.isdir("/usr/share/ehpt"):
+                hide.append("mount -t tmpfs none /usr/share/ehpt")
+            toml = "/usr/lib/x86_64-linux-gnu/libtomlplusplus.so.3"
+            if os.path.exists(toml):
+                hide.append("mount --bind /dev/null '%s'" % os.path.realpath(toml))
+            script = " && ".join(hide + ["test ! -e '%s/scenarios'" % SRC,
+                                         "exec '%s/fmu_run' '%s/p.fmu' 10 2" % (box, box)])
+            r = subprocess.run(["unshare", "-m", "--propagation", "private", "sh", "-c", script],
+                               capture_output=True, text=True, timeout=300)
+            if r.returncode != 0 and ("Operation not permitted" in r.stderr or "unshare failed" in r.stderr):
+                print("skipped: no mount namespace here: " + r.stderr.strip())
+                sys.exit(77 if not failures else 1)
+            check(r.returncode == 0 and project(r.stdout.splitlines(), psecu2[1][0].split(",")) == psecu2[1],
+                  "psecu2_nedc where nothing of ehpt is reachable (trees and libtomlplusplus hidden): the same rows (%d): %s"
+                  % (r.returncode, r.stderr[-400:]))
+        finally:
+            shutil.rmtree(box)
+
+print("ok" if not failures else "%d check(s) failed" % len(failures))
+sys.exit(1 if failures else 0)

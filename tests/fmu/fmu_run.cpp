@@ -1,0 +1,47 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The project's FMI 3.0 importer as a program: runs an FMU from 0 to STOP_S in communication
+// steps of K plant steps and prints a CSV as `ehpt run` writes timeseries.csv (time_s, then the
+// outputs in modelDescription order, shortest round-trip numbers), one row per step end.
+//   fmu_run FILE.fmu K STOP_S
+// Exit 0, or 1 with the FMU's log on stderr. Used where nothing of ehpt may be reachable
+// (tests/fmu/fmu_e2e_test.py: a mount namespace that hides the source and build trees).
+#include <charconv>
+#include <cstdio>
+#include <iostream>
+
+#include "fmi3_importer.hpp"
+
+int main(int argc, char** argv) {
+  if (argc != 4) {
+    std::cerr << "usage: fmu_run FILE.fmu K STOP_S\n";
+    return 2;
+  }
+  ehpt::test::Fmi3Fmu fmu;
+  std::string error;
+  if (!fmu.open(argv[1], error)) {
+    std::cerr << "fmu_run: " << error << "\n";
+    return 1;
+  }
+  fmi3Instance inst = fmu.make_instance("fmu_run");
+  std::vector<std::vector<double>> rows;
+  if (inst == nullptr || !ehpt::test::run_fmu(fmu, inst, std::atoll(argv[2]), std::strtod(argv[3], nullptr), rows, error)) {
+    std::cerr << "fmu_run: " << (inst == nullptr ? "instantiation failed" : error) << "\n";
+    for (const std::string& l : fmu.log) std::cerr << l << "\n";
+    return 1;
+  }
+  std::string out = "time_s";
+  for (const std::string& n : fmu.output_names) out += "," + n;
+  out += "\n";
+  char buf[40];
+  for (const auto& row : rows) {
+    for (std::size_t i = 0; i < row.size(); ++i) {
+      const auto r = std::to_chars(buf, buf + sizeof buf, row[i]);
+      if (i > 0) out += ',';
+      out.append(buf, r.ptr);
+    }
+    out += "\n";
+  }
+  std::fwrite(out.data(), 1, out.size(), stdout);
+  fmu.free_instance(inst);
+  return 0;
+}

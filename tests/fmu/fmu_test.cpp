@@ -1,0 +1,245 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// `ehpt fmu` checked by the project's own FMI 3.0 importer (fmi3_importer.hpp): the FMU's
+// trajectory is `ehpt run`'s, bit for bit, at communication steps of 1, 10 and 100 plant steps;
+// instances in one process are independent; a wrong call is an fmi3Error with a message
+// through the logger, never a crash.
+#include <gtest/gtest.h>
+
+#include <stdlib.h>  // mkdtemp
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "fmi3_importer.hpp"
+#include "io/process.hpp"
+
+namespace ehpt::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string fresh_dir() {
+  std::string base = (fs::temp_directory_path() / "ehpt-fmu-test-XXXXXX").string();
+  EXPECT_NE(::mkdtemp(base.data()), nullptr);
+  return base;
+}
+
+int ehpt(const std::vector<std::string>& args) {
+  std::vector<std::string> argv{EHPT_BINARY};
+  argv.insert(argv.end(), args.begin(), args.end());
+  std::string reason;
+  const int pid = io::start_program(argv, "/dev/null", "/dev/null", false, reason);
+  int status = 0;
+  if (pid < 0 || ::waitpid(pid, &status, 0) != pid) return -1;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+// timeseries.csv of `ehpt run` with every plant step recorded: column name -> values by step
+std::map<std::string, std::vector<double>> reference(const std::string& dir, const std::vector<std::string>& sets) {
+  std::vector<std::string> args{"run", "psecu2_nedc", "--quiet", "--out", dir, "--set", "output.interval_s=0.001"};
+  for (const std::string& s : sets) {
+    args.push_back("--set");
+    args.push_back(s);
+  }
+  EXPECT_EQ(ehpt(args), 0);
+  std::ifstream in(dir + "/timeseries.csv");
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> names;
+  std::stringstream hs(line);
+  for (std::string n; std::getline(hs, n, ',');) names.push_back(n);
+  std::map<std::string, std::vector<double>> cols;
+  while (std::getline(in, line)) {
+    std::stringstream ls(line);
+    std::size_t c = 0;
+    for (std::string v; std::getline(ls, v, ','); ++c) cols[names[c]].push_back(std::strtod(v.c_str(), nullptr));
+  }
+  return cols;
+}
+
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+// Rows of run_fmu against the reference: every output, bit for bit, at every point.
+void expect_equal(const Fmi3Fmu& fmu, const std::vector<std::vector<double>>& rows,
+                  std::map<std::string, std::vector<double>>& ref, std::int64_t k, const std::string& what) {
+  ASSERT_FALSE(rows.empty()) << what;
+  int mismatches = 0;
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    const std::size_t step = std::min((r + 1) * static_cast<std::size_t>(k), ref["time_s"].size() - 1);
+    ASSERT_TRUE(same_bits(rows[r][0], ref["time_s"][step])) << what << ": time " << rows[r][0] << " row " << r;
+    for (std::size_t j = 0; j < fmu.output_names.size(); ++j) {
+      const std::vector<double>& col = ref.at(fmu.output_names[j]);
+      if (!same_bits(rows[r][j + 1], col[step]) && ++mismatches <= 5) {
+        ADD_FAILURE() << what << ": " << fmu.output_names[j] << " at t = " << rows[r][0] << ": FMU " << rows[r][j + 1]
+                      << ", ehpt run " << col[step];
+      }
+    }
+  }
+  EXPECT_EQ(mismatches, 0) << what;
+}
+
+class Fmu3 : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new std::string(fresh_dir());
+    ASSERT_EQ(ehpt({"fmu", "psecu2_nedc", "--set", "solver.duration_s=20", "--out", *dir_ + "/p.fmu"}), 0);
+    ASSERT_EQ(ehpt({"fmu", "psecu2_nedc", "--set", "solver.duration_s=20", "--set", "vehicle.vehicle.mass_kg=1800", "--out",
+                    *dir_ + "/pheavy.fmu"}),
+              0);
+    ref_ = new std::map<std::string, std::vector<double>>(reference(*dir_ + "/ref", {"solver.duration_s=20"}));
+    refheavy_ = new std::map<std::string, std::vector<double>>(
+        reference(*dir_ + "/refheavy", {"solver.duration_s=20", "vehicle.vehicle.mass_kg=1800"}));
+  }
+  static void TearDownTestSuite() {
+    std::error_code ec;
+    fs::remove_all(*dir_, ec);  // the folder this suite made
+    delete dir_;
+    delete ref_;
+    delete refheavy_;
+  }
+  static std::string* dir_;
+  static std::map<std::string, std::vector<double>>*ref_, *refheavy_;
+};
+std::string* Fmu3::dir_ = nullptr;
+std::map<std::string, std::vector<double>>* Fmu3::ref_ = nullptr;
+std::map<std::string, std::vector<double>>* Fmu3::refheavy_ = nullptr;
+
+TEST_F(Fmu3, TheTrajectoryIsEhptRunsBitForBitAtCommunicationStepsOf1_10And100PlantSteps) {
+  Fmi3Fmu fmu;
+  std::string error;
+  ASSERT_TRUE(fmu.open(*dir_ + "/p.fmu", error)) << error;
+  EXPECT_STREQ(fmu.get_version(), "3.0");
+  EXPECT_EQ(fmu.step_s, 0.001);
+  EXPECT_EQ(fmu.stop_s, 20.0);
+  EXPECT_EQ(fmu.output_names.size(), 34u);
+  for (const std::int64_t k : {1, 10, 100}) {
+    fmi3Instance inst = fmu.make_instance("p");
+    ASSERT_NE(inst, nullptr) << (fmu.log.empty() ? "" : fmu.log.back());
+    std::vector<std::vector<double>> rows;
+    ASSERT_TRUE(run_fmu(fmu, inst, k, 20.0, rows, error)) << error;
+    EXPECT_EQ(rows.size(), static_cast<std::size_t>(20000 / k));
+    expect_equal(fmu, rows, *ref_, k, "k = " + std::to_string(k));
+    fmu.free_instance(inst);
+  }
+  // the run moved: the car is at speed at 20 s and SOC has changed (not a run of zeros)
+  EXPECT_GT(ref_->at("speed_m_s").back(), 3.0);
+}
+
+// Two FMUs of different parameters, and two instances of one, all in this process and stepped
+// in turn: each gives its own `ehpt run`.
+TEST_F(Fmu3, InstancesInOneProcessAreIndependent) {
+  Fmi3Fmu a, b;
+  std::string error;
+  ASSERT_TRUE(a.open(*dir_ + "/p.fmu", error)) << error;
+  ASSERT_TRUE(b.open(*dir_ + "/pheavy.fmu", error)) << error;
+  fmi3Instance a1 = a.make_instance("a1"), a2 = a.make_instance("a2"), b1 = b.make_instance("b1");
+  ASSERT_TRUE(a1 && a2 && b1);
+  for (auto [fmu, inst] : {std::pair{&a, a1}, std::pair{&a, a2}, std::pair{&b, b1}}) {
+    ASSERT_EQ(fmu->enter_initialization(inst, fmi3False, 0.0, 0.0, fmi3True, 20.0), fmi3OK);
+    ASSERT_EQ(fmu->exit_initialization(inst), fmi3OK);
+  }
+  const fmi3ValueReference soc = a.vr.at("soc"), soc_b = b.vr.at("soc");
+  std::vector<double> soc_a1, soc_a2, soc_b1;
+  for (std::int64_t n = 0; n < 200; ++n) {
+    const double t = static_cast<double>(n) * 0.1;
+    fmi3Boolean e, term, early;
+    fmi3Float64 last;
+    double v = 0.0;
+    for (auto [fmu, inst, vr, out] : {std::tuple{&a, a1, soc, &soc_a1}, std::tuple{&b, b1, soc_b, &soc_b1},
+                                      std::tuple{&a, a2, soc, &soc_a2}}) {
+      ASSERT_EQ(fmu->do_step(inst, t, 0.1, fmi3True, &e, &term, &early, &last), fmi3OK);
+      ASSERT_EQ(fmu->get_float64(inst, &vr, 1, &v, 1), fmi3OK);
+      out->push_back(v);
+    }
+  }
+  for (std::size_t i = 0; i < soc_a1.size(); ++i) {
+    const std::size_t step = (i + 1) * 100;
+    ASSERT_TRUE(same_bits(soc_a1[i], ref_->at("soc")[step])) << i;
+    ASSERT_TRUE(same_bits(soc_a2[i], ref_->at("soc")[step])) << i;
+    ASSERT_TRUE(same_bits(soc_b1[i], refheavy_->at("soc")[step])) << i;
+  }
+  EXPECT_NE(ref_->at("soc").back(), refheavy_->at("soc").back());  // the parameter changed the run
+  a.free_instance(a1);
+  a.free_instance(a2);
+  b.free_instance(b1);
+}
+
+bool logged(const Fmi3Fmu& fmu, const std::string& text) {
+  for (const std::string& l : fmu.log) {
+    if (l.find(text) != std::string::npos) return true;
+  }
+  return false;
+}
+
+// Wrong calls: fmi3Error (or NULL) with the reason in the log, never a crash; the instance
+// then refuses everything but free.
+TEST_F(Fmu3, WrongCallsAreErrorsWithAMessage) {
+  Fmi3Fmu fmu;
+  std::string error;
+  ASSERT_TRUE(fmu.open(*dir_ + "/p.fmu", error)) << error;
+  fmi3Boolean e, term, early;
+  fmi3Float64 last;
+  {  // doStep before initialization
+    fmi3Instance i = fmu.make_instance("order");
+    ASSERT_NE(i, nullptr);
+    EXPECT_EQ(fmu.do_step(i, 0.0, 0.001, fmi3True, &e, &term, &early, &last), fmi3Error);
+    EXPECT_TRUE(logged(fmu, "3 logStatusError: order: fmi3DoStep called in Instantiated (FMI's calling sequence)"));
+    EXPECT_EQ(fmu.enter_initialization(i, fmi3False, 0.0, 0.0, fmi3True, 20.0), fmi3Error);  // in error now
+    fmu.free_instance(i);
+  }
+  const auto initialized = [&](const char* name) {
+    fmi3Instance i = fmu.make_instance(name);
+    EXPECT_EQ(fmu.enter_initialization(i, fmi3False, 0.0, 0.0, fmi3True, 20.0), fmi3OK);
+    EXPECT_EQ(fmu.exit_initialization(i), fmi3OK);
+    return i;
+  };
+  {  // not a whole number of plant steps
+    fmi3Instance i = initialized("grid");
+    EXPECT_EQ(fmu.do_step(i, 0.0, 0.0015, fmi3True, &e, &term, &early, &last), fmi3Error);
+    EXPECT_TRUE(logged(fmu, "communicationStepSize = 0.0015 s is not a whole number of plant steps (0.001 s"));
+    fmu.free_instance(i);
+  }
+  {  // NaN, a point that is not where the FMU is, and past the stop time
+    fmi3Instance i = initialized("nan");
+    EXPECT_EQ(fmu.do_step(i, std::nan(""), 0.001, fmi3True, &e, &term, &early, &last), fmi3Error);
+    EXPECT_TRUE(logged(fmu, "currentCommunicationPoint = nan s, but the FMU is at 0 s"));
+    fmu.free_instance(i);
+    i = initialized("late");
+    EXPECT_EQ(fmu.do_step(i, 0.5, 0.001, fmi3True, &e, &term, &early, &last), fmi3Error);
+    fmu.free_instance(i);
+    i = initialized("past");
+    EXPECT_EQ(fmu.do_step(i, 0.0, 20.001, fmi3True, &e, &term, &early, &last), fmi3Error);
+    EXPECT_TRUE(logged(fmu, "past the stop time 20 s"));
+    fmu.free_instance(i);
+  }
+  {  // an output cannot be set; an unknown value reference cannot be read
+    fmi3Instance i = initialized("set");
+    const fmi3ValueReference vr = 1, bad = 999;
+    const double v = 1.0;
+    double got = 0.0;
+    EXPECT_EQ(fmu.set_float64(i, &vr, 1, &v, 1), fmi3Error);
+    EXPECT_TRUE(logged(fmu, "fmi3SetFloat64: every variable of this FMU is an output")) << fmu.log.back();
+    EXPECT_EQ(fmu.get_float64(i, &bad, 1, &got, 1), fmi3Error);
+    EXPECT_TRUE(logged(fmu, "value reference 999 is not one of this FMU's"));
+    fmu.free_instance(i);
+  }
+  // instantiation: another FMU's token, a start time other than 0
+  EXPECT_EQ(fmu.make_instance("token", "{0000}"), nullptr);
+  EXPECT_TRUE(logged(fmu, "instantiationToken \"{0000}\" is not this FMU's"));
+  fmi3Instance i = fmu.make_instance("start");
+  EXPECT_EQ(fmu.enter_initialization(i, fmi3False, 0.0, 1.0, fmi3False, 0.0), fmi3Error);
+  EXPECT_TRUE(logged(fmu, "startTime = 1: an ehpt FMU starts at 0 s"));
+  fmu.free_instance(i);
+  // a resource missing: NULL, the file named
+  fs::remove(fmu.dir + "/resources/vehicles/psecu2.toml");
+  EXPECT_EQ(fmu.make_instance("missing"), nullptr);
+  EXPECT_TRUE(logged(fmu, "psecu2.toml")) << (fmu.log.empty() ? "" : fmu.log.back());
+}
+
+}  // namespace
+}  // namespace ehpt::test
