@@ -9,6 +9,7 @@
 #include <iostream>
 #include <set>
 
+#include "hil/bus/bus_plant.hpp"  // can_run_on_bus: --ecu none has the bus's rule
 #include "hil/config/config.hpp"
 #include "hil/diag/provenance.hpp"
 #include "io/junit.hpp"
@@ -29,15 +30,20 @@ namespace ehpt::cli {
 namespace {
 
 const char* kFmuHelp =
-    "usage: ehpt fmu SCENARIO [--fmi 3] [--out FILE.fmu] [--set key=value ...]\n"
+    "usage: ehpt fmu SCENARIO [--fmi 3] [--ecu builtin|none] [--out FILE.fmu] [--set key=value ...]\n"
     "\n"
-    "Builds an FMI 3.0 co-simulation FMU of the scenario for x86_64-linux: its vehicle with the\n"
-    "built-in ECU driving the scenario's cycle, every output of 'ehpt signals SCENARIO' an FMU\n"
-    "output (Float64, SI units), doStep in whole plant steps (fixedInternalStepSize), the same\n"
-    "trajectory as 'ehpt run' of the scenario. The FMU holds the scenario, vehicle, maps and\n"
-    "cycle under resources/ and runs where ehpt is not installed. docs/fmu.md: the variables,\n"
-    "the calling sequence, and how to import it (FMPy, OMSimulator, Simulink, VEOS, SIL Kit).\n"
-    "  --fmi 3          the FMI version (3.0; 2.0 and inputs/parameters: not yet)\n"
+    "Builds an FMI 3.0 co-simulation FMU of the scenario for x86_64-linux: its vehicle on the\n"
+    "scenario's cycle, every output of 'ehpt signals SCENARIO' an FMU output (Float64, SI\n"
+    "units), doStep in whole plant steps (fixedInternalStepSize). The FMU holds the scenario,\n"
+    "vehicle, maps and cycle under resources/ and runs where ehpt is not installed.\n"
+    "docs/fmu.md: the variables, the calling sequence, and how to import it (FMPy, OMSimulator,\n"
+    "Simulink, VEOS, SIL Kit).\n"
+    "  --ecu builtin    the built-in ECU drives the plant: the same trajectory as 'ehpt run'\n"
+    "                   (the default)\n"
+    "  --ecu none       the importer is the ECU: the command message's fields are inputs\n"
+    "                   (command.motTauRef_Nm, ...), the sensor message's outputs\n"
+    "                   (sensors.batSOC, ...), as an ECU on the bus sees them\n"
+    "  --fmi 3          the FMI version (3.0; FMI 2.0 and parameters: not yet)\n"
     "  --out FILE.fmu   where to write it (default out/<scenario name>.fmu); never over an\n"
     "                   existing file\n"
     "  --set key=value  as for 'ehpt run': the FMU's scenario is the one with these overrides\n";
@@ -73,13 +79,18 @@ std::string documentation_page(const fmu::Description& d, const std::string& id)
   using io::xml_escape;
   std::string h = "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>" + xml_escape(id) +
                   "</title></head><body>\n<h1>" + xml_escape(d.model_name) + "</h1>\n<p>" + xml_escape(d.description) +
-                  "</p>\n<p>An FMI 3.0 co-simulation FMU made by ehpt (BSD-3-Clause): the vehicle with its built-in ECU "
-                  "on the scenario's cycle. Communication steps are whole multiples of " +
+                  "</p>\n<p>An FMI 3.0 co-simulation FMU made by ehpt (BSD-3-Clause): the vehicle on the scenario's "
+                  "cycle, " + (d.ecu == fmu::EcuMode::kNone ? "its ECU the importer (command.* inputs, sensors.* outputs)"
+                                                            : "driven by its built-in ECU") +
+                  ". Communication steps are whole multiples of " +
                   xml_escape(io::number_text(d.step_s)) + " s; startTime 0. Licences: licenses/.</p>\n";
   h += "<table>\n<tr><th>valueReference</th><th>name</th><th>causality</th><th>unit</th><th>description</th></tr>\n";
   for (const fmu::Variable& v : d.variables) {
     h += "<tr><td>" + std::to_string(v.vr) + "</td><td>" + xml_escape(v.name) + "</td><td>" +
-         (v.causality == fmu::Causality::kIndependent ? "independent" : "output") + "</td><td>" + xml_escape(v.unit) +
+         (v.causality == fmu::Causality::kIndependent ? "independent"
+          : v.causality == fmu::Causality::kInput    ? "input"
+                                                     : "output") +
+         "</td><td>" + xml_escape(v.unit) +
          "</td><td>" + xml_escape(v.description) + "</td></tr>\n";
   }
   return h + "</table>\n</body></html>\n";
@@ -89,11 +100,11 @@ std::string documentation_page(const fmu::Description& d, const std::string& id)
 
 int cmd_fmu(const std::vector<std::string>& args) {
   if (wants_help(args)) return out(kFmuHelp) ? 0 : 1;
-  std::string scenario, out_path, fmi = "3";
+  std::string scenario, out_path, fmi = "3", ecu = "builtin";
   std::vector<std::string> sets;
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
-    if ((a == "--out" || a == "--set" || a == "--fmi") && i + 1 >= args.size()) {
+    if ((a == "--out" || a == "--set" || a == "--fmi" || a == "--ecu") && i + 1 >= args.size()) {
       std::cerr << a << " needs a value\n" << kFmuHelp;
       return 1;
     }
@@ -103,6 +114,8 @@ int cmd_fmu(const std::vector<std::string>& args) {
       sets.push_back(args[++i]);
     } else if (a == "--fmi") {
       fmi = args[++i];
+    } else if (a == "--ecu") {
+      ecu = args[++i];
     } else if (!a.empty() && a[0] == '-') {
       std::cerr << "unknown option " << a << "\n" << kFmuHelp;
       return 1;
@@ -121,8 +134,18 @@ int cmd_fmu(const std::vector<std::string>& args) {
     std::cerr << "--fmi " << fmi << ": this ehpt builds FMI 3.0 FMUs (--fmi 3); FMI 2.0 is not built yet\n";
     return 2;
   }
+  if (ecu != "builtin" && ecu != "none") {
+    std::cerr << "--ecu " << ecu << ": builtin (the scenario's ECU drives the plant) or none (the importer is the ECU)\n";
+    return 2;
+  }
+  const fmu::EcuMode mode = ecu == "none" ? fmu::EcuMode::kNone : fmu::EcuMode::kBuiltin;
   hil::Scenario sc;
   if (const int rc = load(scenario, sets, sc); rc != 0) return rc;
+  if (std::string why; mode == fmu::EcuMode::kNone && !hil::can_run_on_bus(sc, why)) {
+    // the same rule as a bus: a rig has no messages; an ECU latency belongs to the built-in ECU
+    std::cerr << "error: --ecu none: " << why << "\n";
+    return 2;
+  }
   for (const std::string& s : sets) {
     if (s.find('\n') != std::string::npos || s.find('\r') != std::string::npos) {
       std::cerr << "--set: a line break in '" << s << "' cannot go into the FMU's manifest\n";
@@ -136,16 +159,16 @@ int cmd_fmu(const std::vector<std::string>& args) {
               << " is there already; ehpt fmu never writes over a path (remove it, or give another --out)\n";
     return 2;
   }
-  const std::string id = identifier_of(sc.name);
+  const std::string id = identifier_of(sc.name) + (mode == fmu::EcuMode::kNone ? "_plant" : "");
   std::string error;
 
   // resources/: every file the scenario read, under the folder that holds them all
-  std::vector<fs::path> inputs;
-  for (const hil::InputFile& f : sc.inputs) inputs.push_back(fs::weakly_canonical(fs::absolute(f.path, ec), ec));
-  const fs::path root = common_root(inputs);
+  std::vector<fs::path> input_files;
+  for (const hil::InputFile& f : sc.inputs) input_files.push_back(fs::weakly_canonical(fs::absolute(f.path, ec), ec));
+  const fs::path root = common_root(input_files);
   std::vector<io::ZipEntry> entries;
   std::set<std::string> seen;
-  for (const fs::path& p : inputs) {
+  for (const fs::path& p : input_files) {
     const std::string rel = p.lexically_relative(root).generic_string();
     if (!seen.insert(rel).second) continue;
     io::ZipEntry e{"resources/" + rel, ""};
@@ -191,12 +214,14 @@ int cmd_fmu(const std::vector<std::string>& args) {
   std::string digest_input;
   for (const io::ZipEntry& e : entries) digest_input += e.name + '\0' + io::sha256_hex(e.data) + '\n';
   for (const std::string& s : sets) digest_input += "set " + s + '\n';
+  digest_input += "ecu " + ecu + '\n';
   const std::string token = "{" + io::sha256_hex(digest_input).substr(0, 32) + "}";
   std::string manifest = "# ehpt fmu 1\ntoken " + token + "\nscenario " + scenario_rel + "\n";
   for (const std::string& s : sets) manifest += "set " + s + "\n";
+  if (mode == fmu::EcuMode::kNone) manifest += "ecu none\n";
   entries.push_back({std::string("resources/") + fmu::kManifestName, manifest});
 
-  const fmu::Description d = fmu::describe(sc);
+  const fmu::Description d = fmu::describe(sc, mode);
   const std::string tool = "ehpt " + std::string(hil::build_info().version);
   entries.insert(entries.begin(), io::ZipEntry{"modelDescription.xml", fmu::model_description_3(d, id, token, tool)});
   entries.push_back({"documentation/index.html", documentation_page(d, id)});
@@ -212,10 +237,14 @@ int cmd_fmu(const std::vector<std::string>& args) {
     std::cerr << "error: " << error << "\n";
     return 1;
   }
-  std::size_t outputs = 0;
-  for (const fmu::Variable& v : d.variables) outputs += v.causality == fmu::Causality::kOutput ? 1 : 0;
+  std::size_t outputs = 0, inputs = 0;
+  for (const fmu::Variable& v : d.variables) {
+    outputs += v.causality == fmu::Causality::kOutput ? 1 : 0;
+    inputs += v.causality == fmu::Causality::kInput ? 1 : 0;
+  }
   return out("fmu           " + out_path + ": FMI 3.0 co-simulation, modelIdentifier " + id + ", " +
-             std::to_string(outputs) + " outputs, step " + io::number_text(d.step_s) + " s, stop " +
+             std::to_string(inputs) + " inputs, " + std::to_string(outputs) + " outputs, step " +
+             io::number_text(d.step_s) + " s, stop " +
              io::number_text(d.stop_s) + " s, " + std::to_string(entries.size()) + " files, " +
              std::to_string(archive.size()) + " bytes\n")
              ? 0

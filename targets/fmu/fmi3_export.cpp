@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The FMI 3.0 co-simulation functions of an ehpt FMU (io/fmi/fmi3_api.h), each a thin map onto
 // targets/fmu/fmu_instance.hpp. Every function of the API is exported, as importers look them
-// all up; what this FMU does not offer (Float32 and the integer types, clocks, FMU state,
+// all; what this FMU does not offer (Float32, the integer types and strings, clocks, FMU state,
 // derivatives, Event Mode, Scheduled Execution) answers fmi3Error with a message saying so.
 // Nothing throws across the C boundary: an exception becomes fmi3Fatal with its text.
 
@@ -133,21 +133,33 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference valueR
                  [&](Fmu3& f) { return ok(f.instance->get_float64(valueReferences, nValueReferences, values, nValues)); });
 }
 
-fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference[], size_t nValueReferences, const fmi3Float64[],
-                          size_t) {
-  if (nValueReferences == 0) return instance != nullptr ? fmi3OK : fmi3Error;
-  return refuse(instance, "fmi3SetFloat64: every variable of this FMU is an output (no input or parameter to set)");
+fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences,
+                          const fmi3Float64 values[], size_t nValues) {
+  return guarded(instance,
+                 [&](Fmu3& f) { return ok(f.instance->set_float64(valueReferences, nValueReferences, values, nValues)); });
+}
+
+fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences,
+                          fmi3Boolean values[], size_t nValues) {
+  return guarded(instance,
+                 [&](Fmu3& f) { return ok(f.instance->get_boolean(valueReferences, nValueReferences, values, nValues)); });
+}
+
+fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences,
+                          const fmi3Boolean values[], size_t nValues) {
+  return guarded(instance,
+                 [&](Fmu3& f) { return ok(f.instance->set_boolean(valueReferences, nValueReferences, values, nValues)); });
 }
 
 // The types this FMU has no variable of: a call with references is an error that says so.
 #define EHPT_NO_VARIABLES_OF(TYPE, CONST)                                                                        \
   fmi3Status fmi3Get##TYPE(fmi3Instance instance, const fmi3ValueReference[], size_t n, fmi3##TYPE[], size_t) {   \
     if (n == 0) return instance != nullptr ? fmi3OK : fmi3Error;                                                 \
-    return refuse(instance, "fmi3Get" #TYPE ": this FMU has no " #TYPE " variable (every variable is Float64)"); \
+    return refuse(instance, "fmi3Get" #TYPE ": this FMU has no " #TYPE " variable (only Float64 and Boolean)"); \
   }                                                                                                              \
   fmi3Status fmi3Set##TYPE(fmi3Instance instance, const fmi3ValueReference[], size_t n, CONST fmi3##TYPE[], size_t) { \
     if (n == 0) return instance != nullptr ? fmi3OK : fmi3Error;                                                 \
-    return refuse(instance, "fmi3Set" #TYPE ": this FMU has no " #TYPE " variable (every variable is Float64)"); \
+    return refuse(instance, "fmi3Set" #TYPE ": this FMU has no " #TYPE " variable (only Float64 and Boolean)"); \
   }
 EHPT_NO_VARIABLES_OF(Float32, const)
 EHPT_NO_VARIABLES_OF(Int8, const)
@@ -158,7 +170,6 @@ EHPT_NO_VARIABLES_OF(Int32, const)
 EHPT_NO_VARIABLES_OF(UInt32, const)
 EHPT_NO_VARIABLES_OF(Int64, const)
 EHPT_NO_VARIABLES_OF(UInt64, const)
-EHPT_NO_VARIABLES_OF(Boolean, const)
 EHPT_NO_VARIABLES_OF(String, const)
 #undef EHPT_NO_VARIABLES_OF
 

@@ -4,8 +4,10 @@
 #include <cstdio>
 #include <map>
 
+#include "ecu/psd_ecu.hpp"
 #include "hil/run/simulation.hpp"
 #include "io/junit.hpp"  // xml_escape
+#include "msgs/fields.hpp"
 
 namespace ehpt::fmu {
 
@@ -56,13 +58,70 @@ std::string number(double v) {
 
 }  // namespace
 
+std::string fmi_unit(std::string_view field_unit) {
+  if (field_unit == "Nm") return "N.m";
+  return std::string(field_unit);
+}
+
+namespace {
+
+const char* kind_text(msgs::FieldKind k) {
+  switch (k) {
+    case msgs::FieldKind::kFraction:
+      return " (per unit)";
+    case msgs::FieldKind::kFlag:
+      return " (true/false)";
+    case msgs::FieldKind::kBits:
+      return " (bit set: plant fault bits)";
+    case msgs::FieldKind::kQuantity:
+      break;
+  }
+  return "";
+}
+
+template <class Sensors, class Command>
+void add_message_fields(Description& d, std::uint32_t& vr) {
+  const auto& sensors = msgs::FieldTable<Sensors>::kFields;
+  for (std::size_t i = 0; i < sensors.size(); ++i) {
+    Variable v;
+    v.vr = vr++;
+    v.name = "sensors." + std::string(sensors[i].name);
+    v.unit = fmi_unit(sensors[i].unit);
+    v.description = "sensor message field " + std::string(sensors[i].name) + kind_text(sensors[i].kind) +
+                    ", as the ECU reads it at its last sample";
+    v.type = sensors[i].kind == msgs::FieldKind::kFlag ? Type::kBoolean : Type::kFloat64;
+    v.source = Source::kSensor;
+    v.index = static_cast<int>(i);
+    d.variables.push_back(v);
+  }
+  const auto& command = msgs::FieldTable<Command>::kFields;
+  for (std::size_t i = 0; i < command.size(); ++i) {
+    Variable v;
+    v.vr = vr++;
+    v.name = "command." + std::string(command[i].name);
+    v.unit = fmi_unit(command[i].unit);
+    v.description = "command message field " + std::string(command[i].name) + kind_text(command[i].kind) +
+                    ", acting from the start of each doStep";
+    v.causality = Causality::kInput;
+    v.type = command[i].kind == msgs::FieldKind::kFlag ? Type::kBoolean : Type::kFloat64;
+    v.source = Source::kCommand;
+    v.index = static_cast<int>(i);
+    v.start = 0.0;  // the safe command: no torque, no power, engine off
+    d.variables.push_back(v);
+  }
+}
+
+}  // namespace
+
 std::string unit_of(std::string_view signal_name) {
   const UnitRow* u = unit_row(signal_name);
   return u != nullptr ? u->unit : "";
 }
 
-Description describe(const hil::Scenario& sc) {
+Description describe(const hil::Scenario& sc, EcuMode ecu) {
   Description d;
+  d.ecu = ecu;
+  d.psd = sc.ecu.holds<ecu::PsdEcuParams>();
   d.model_name = sc.name;
   d.description = sc.description;
   d.step_s = sc.solver.step_s;
@@ -73,6 +132,7 @@ Description describe(const hil::Scenario& sc) {
   time.unit = "s";
   time.description = "simulation time";
   time.causality = Causality::kIndependent;
+  time.source = Source::kTime;
   d.variables.push_back(time);
   const std::vector<hil::SignalInfo> signals = hil::scenario_signals(sc);
   std::uint32_t vr = 1;
@@ -82,9 +142,17 @@ Description describe(const hil::Scenario& sc) {
     v.vr = vr++;
     v.name = std::string(signals[i].name);
     v.unit = unit_of(signals[i].name);
+    v.source = Source::kSignal;
     v.description = std::string(signals[i].meaning);
-    v.signal = static_cast<int>(i);
+    v.index = static_cast<int>(i);
     d.variables.push_back(v);
+  }
+  if (ecu == EcuMode::kNone) {
+    if (d.psd) {
+      add_message_fields<msgs::PsdSensors, msgs::PsdCommand>(d, vr);
+    } else {
+      add_message_fields<msgs::EvSensors, msgs::EvCommand>(d, vr);
+    }
   }
   return d;
 }
@@ -127,11 +195,25 @@ std::string model_description_3(const Description& d, const std::string& model_i
        "\"/>\n";
   x += "  <ModelVariables>\n";
   for (const Variable& v : d.variables) {
-    x += "    <Float64 name=\"" + xml_escape(v.name) + "\" valueReference=\"" + std::to_string(v.vr) + "\"";
+    const bool boolean = v.type == Type::kBoolean;
+    x += std::string("    <") + (boolean ? "Boolean" : "Float64") + " name=\"" + xml_escape(v.name) +
+         "\" valueReference=\"" + std::to_string(v.vr) + "\"";
     if (!v.description.empty()) x += " description=\"" + xml_escape(v.description) + "\"";
-    x += v.causality == Causality::kIndependent ? " causality=\"independent\" variability=\"continuous\""
-                                                : " causality=\"output\" variability=\"continuous\"";
-    if (!v.unit.empty()) x += " unit=\"" + xml_escape(v.unit) + "\"";
+    // a Boolean is discrete; the sensor message changes only at the ECU's samples
+    const char* variability = boolean || v.source == Source::kSensor ? "discrete" : "continuous";
+    switch (v.causality) {
+      case Causality::kIndependent:
+        x += " causality=\"independent\" variability=\"continuous\"";
+        break;
+      case Causality::kOutput:
+        x += std::string(" causality=\"output\" variability=\"") + variability + "\"";
+        break;
+      case Causality::kInput:
+        x += std::string(" causality=\"input\" variability=\"") + (boolean ? "discrete" : "continuous") + "\" start=\"" +
+             (boolean ? (v.start != 0.0 ? "true" : "false") : number(v.start)) + "\"";
+        break;
+    }
+    if (!v.unit.empty() && !boolean) x += " unit=\"" + xml_escape(v.unit) + "\"";
     x += "/>\n";
   }
   x += "  </ModelVariables>\n  <ModelStructure>\n";

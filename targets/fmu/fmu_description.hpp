@@ -14,30 +14,48 @@
 
 namespace ehpt::fmu {
 
-enum class Causality { kIndependent, kOutput };
+enum class Causality { kIndependent, kOutput, kInput };
+enum class Type { kFloat64, kBoolean };
+// Where a variable's value comes from: the time, a plant signal (every step), a field of the
+// sensor message the ECU reads at its samples, or (an input) a field of the command message.
+enum class Source { kTime, kSignal, kSensor, kCommand };
+
+// Whose ECU drives the plant: the scenario's built-in one, or the importer (--ecu none: the
+// command message's fields are inputs, the sensor message's outputs).
+enum class EcuMode { kBuiltin, kNone };
 
 struct Variable {
-  std::uint32_t vr = 0;      // valueReference: 0 is time; outputs from 1 in signal order
-  std::string name;          // as in `ehpt signals` (time_s is FMI's "time")
+  std::uint32_t vr = 0;      // valueReference: 0 is time; the signals from 1, then sensors, commands
+  std::string name;          // a signal as in `ehpt signals` (time_s is FMI's "time"); a message
+                             // field as sensors.<field> or command.<field>
   std::string unit;          // "" without unit
   std::string description;
   Causality causality = Causality::kOutput;
-  int signal = -1;           // its index in the simulation's signals() (outputs)
+  Type type = Type::kFloat64;
+  Source source = Source::kSignal;
+  int index = -1;            // in signals(), or in the message's field table (msgs/fields.hpp)
+  double start = 0.0;        // an input's start value (the safe command: 0, engine off)
 };
 
 struct Description {
+  EcuMode ecu = EcuMode::kBuiltin;
+  bool psd = false;           // the hybrid's messages (else the EV's)
   std::string model_name;     // the scenario's name
   std::string description;    // the scenario's
   double step_s = 0.0;        // the plant step: fixedInternalStepSize
   double stop_s = 0.0;        // the scenario's duration: DefaultExperiment stopTime
-  std::vector<Variable> variables;
+  std::vector<Variable> variables;  // variables[i].vr == i
 };
 
-Description describe(const hil::Scenario& sc);
+// ecu = kNone needs a vehicle with bus messages (hil::can_run_on_bus' rule); the caller checks.
+Description describe(const hil::Scenario& sc, EcuMode ecu = EcuMode::kBuiltin);
 
 // The SI unit of a signal name's suffix (speed_m_s -> "m/s"); "" for a quantity without one
 // (soc, iceON, driverRequest).
 std::string unit_of(std::string_view signal_name);
+
+// The FMI unit of a message field's unit ("Nm" -> "N.m"); "" for none.
+std::string fmi_unit(std::string_view field_unit);
 
 // modelDescription.xml (FMI 3.0, co-simulation); token: the instantiationToken the library
 // checks; generation_tool: "ehpt VERSION".

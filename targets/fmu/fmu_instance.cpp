@@ -1,18 +1,19 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "targets/fmu/fmu_instance.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
-#include <sstream>
 
 #include "hil/run/batch.hpp"  // fault_text
 #include "io/number_format.hpp"
+#include "msgs/fields.hpp"
 
 namespace ehpt::fmu {
 
 namespace {
 
-constexpr int kOk = 0, kError = 3;
+constexpr int kWarning = 1, kDiscard = 2, kError = 3;
 // the steps one run() of the runner may take (its row buffer); a longer doStep loops
 constexpr std::int64_t kChunkSteps = 100000;
 
@@ -21,15 +22,19 @@ std::string trimmed(std::string s) {
   return s;
 }
 
+const char* type_name(Type t) { return t == Type::kBoolean ? "Boolean" : "Float64"; }
+
 }  // namespace
 
-Instance::Instance(hil::Scenario sc, std::string scenario_path, std::vector<std::string> sets, Log log)
+Instance::Instance(hil::Scenario sc, std::string scenario_path, std::vector<std::string> sets, EcuMode ecu, Log log)
     : sc_(std::move(sc)),
       scenario_path_(std::move(scenario_path)),
       sets_(std::move(sets)),
       log_(log),
-      description_(describe(sc_)) {
-  outputs_.assign(description_.variables.size(), 0.0);
+      description_(describe(sc_, ecu)),
+      ecu_(ecu) {
+  values_.assign(description_.variables.size(), 0.0);
+  for (const Variable& v : description_.variables) values_[v.vr] = v.start;
 }
 
 std::unique_ptr<Instance> Instance::make(const std::string& resource_dir, const std::string& token, Log log) {
@@ -43,11 +48,13 @@ std::unique_ptr<Instance> Instance::make(const std::string& resource_dir, const 
   }
   std::string line, own_token, scenario;
   std::vector<std::string> sets;
+  EcuMode ecu = EcuMode::kBuiltin;
   while (std::getline(in, line)) {
     line = trimmed(line);
     if (line.rfind("token ", 0) == 0) own_token = line.substr(6);
     if (line.rfind("scenario ", 0) == 0) scenario = line.substr(9);
     if (line.rfind("set ", 0) == 0) sets.push_back(line.substr(4));
+    if (line == "ecu none") ecu = EcuMode::kNone;
   }
   if (own_token.empty() || scenario.empty()) {
     log(kError, "logStatusError", manifest + ": no 'token' or 'scenario' line (the FMU is damaged)");
@@ -65,7 +72,7 @@ std::unique_ptr<Instance> Instance::make(const std::string& resource_dir, const 
     for (const std::string& e : errors) log(kError, "logStatusError", e);
     return nullptr;
   }
-  return std::unique_ptr<Instance>(new Instance(std::move(sc), dir + scenario, std::move(sets), log));
+  return std::unique_ptr<Instance>(new Instance(std::move(sc), dir + scenario, std::move(sets), ecu, log));
 }
 
 bool Instance::fail(const std::string& message) {
@@ -105,17 +112,54 @@ bool Instance::enter_initialization(bool stop_defined, double start_s, double st
   return true;
 }
 
+void Instance::refresh_outputs() {
+  const std::span<const double> y = sim_->outputs();
+  if (ecu_ == EcuMode::kNone) {
+    if (description_.psd) {
+      sim_->read_sensors(psd_sensors_);
+    } else {
+      sim_->read_sensors(ev_sensors_);
+    }
+  }
+  for (const Variable& v : description_.variables) {
+    if (v.source == Source::kSignal) {
+      values_[v.vr] = y[static_cast<std::size_t>(v.index)];
+    } else if (v.source == Source::kSensor) {
+      const auto i = static_cast<std::size_t>(v.index);
+      values_[v.vr] = description_.psd ? msgs::kPsdSensorFieldTable[i].get(psd_sensors_)
+                                       : msgs::kEvSensorFieldTable[i].get(ev_sensors_);
+    }
+  }
+}
+
+void Instance::apply_inputs() {
+  for (const Variable& v : description_.variables) {
+    if (v.source != Source::kCommand) continue;
+    const auto i = static_cast<std::size_t>(v.index);
+    if (description_.psd) {
+      msgs::kPsdCommandFieldTable[i].set(psd_command_, values_[v.vr]);
+    } else {
+      msgs::kEvCommandFieldTable[i].set(ev_command_, values_[v.vr]);
+    }
+  }
+  if (description_.psd) {
+    psd_command_.stamp = psd_sensors_.stamp;  // the sample it answers
+    sim_->write_command(psd_command_);
+  } else {
+    ev_command_.stamp = ev_sensors_.stamp;
+    sim_->write_command(ev_command_);
+  }
+}
+
 bool Instance::exit_initialization() {
   if (!in(State::kInitialization, "fmi3ExitInitializationMode")) return false;
   hil::SimulationOptions opt;
   opt.columns = {0};  // the runner records time only: the FMU's outputs are read at each point
   opt.chunk_steps = kChunkSteps;
+  opt.external_ecu = ecu_ == EcuMode::kNone;
   sim_ = hil::make_simulation(sc_, opt);
   if (!sim_) return fail(sc_.name + ": the simulation cannot be built");
-  const std::span<const double> y = sim_->outputs();
-  for (const Variable& v : description_.variables) {
-    if (v.signal >= 0) outputs_[v.vr] = y[static_cast<std::size_t>(v.signal)];
-  }
+  refresh_outputs();
   state_ = State::kStep;
   return true;
 }
@@ -145,6 +189,7 @@ bool Instance::do_step(double current_s, double step_s, double& reached_s, bool&
     return fail("fmi3DoStep: to " + io::number_text(now_s + step_s) + " s, past the stop time " + io::number_text(stop_s_) +
                 " s (set stopTime in fmi3EnterInitializationMode)");
   }
+  if (ecu_ == EcuMode::kNone) apply_inputs();  // the inputs act over this step
   std::int64_t left = n;
   while (left > 0 && !sim_->finished()) {
     const std::int64_t k = sim_->step(std::min(left, kChunkSteps));
@@ -152,35 +197,93 @@ bool Instance::do_step(double current_s, double step_s, double& reached_s, bool&
     if (k <= 0) break;
     left -= k;
   }
-  const std::span<const double> y = sim_->outputs();
-  for (const Variable& v : description_.variables) {
-    if (v.signal >= 0) outputs_[v.vr] = y[static_cast<std::size_t>(v.signal)];
-  }
+  refresh_outputs();
   reached_s = sim_->time_s();
   if (left > 0) {  // the plant stopped on a fault (FaultPolicy::kStop), as ehpt run does
     stopped = true;
     state_ = State::kTerminated;
-    log_(2, "logStatusDiscard",
+    log_(kDiscard, "logStatusDiscard",
          sc_.name + ": the plant stopped on a fault at t = " + io::number_text(sim_->stats().fault_time_s) + " s: " +
              hil::fault_text(sim_->stats().fault) + " (the output 'fault' has its bits)");
   }
   return true;
 }
 
-bool Instance::get_float64(const std::uint32_t* vrs, std::size_t n, double* values, std::size_t n_values) {
+template <class T>
+bool Instance::get_values(const char* call, Type type, const std::uint32_t* vrs, std::size_t n, T* values,
+                          std::size_t n_values) {
   if (state_ == State::kError) return false;
   if (n != n_values || (n > 0 && (vrs == nullptr || values == nullptr))) {
-    return fail("fmi3GetFloat64: " + std::to_string(n) + " value references but room for " + std::to_string(n_values) +
-                " values (every variable is a scalar)");
+    return fail(std::string(call) + ": " + std::to_string(n) + " value references but room for " +
+                std::to_string(n_values) + " values (every variable is a scalar)");
   }
   for (std::size_t i = 0; i < n; ++i) {
-    if (vrs[i] >= outputs_.size()) {
-      return fail("fmi3GetFloat64: value reference " + std::to_string(vrs[i]) + " is not one of this FMU's (0 .. " +
-                  std::to_string(outputs_.size() - 1) + ")");
+    if (vrs[i] >= values_.size()) {
+      return fail(std::string(call) + ": value reference " + std::to_string(vrs[i]) + " is not one of this FMU's (0 .. " +
+                  std::to_string(values_.size() - 1) + ")");
     }
-    values[i] = vrs[i] == 0 ? (sim_ ? sim_->time_s() : 0.0) : outputs_[vrs[i]];
+    const Variable& v = description_.variables[vrs[i]];
+    if (v.type != type) {
+      return fail(std::string(call) + ": " + v.name + " (value reference " + std::to_string(v.vr) + ") is a " +
+                  type_name(v.type) + " variable");
+    }
+    const double x = v.source == Source::kTime ? (sim_ ? sim_->time_s() : 0.0) : values_[vrs[i]];
+    if constexpr (std::is_same_v<T, bool>) {
+      values[i] = x != 0.0;
+    } else {
+      values[i] = x;
+    }
   }
   return true;
+}
+
+template <class T>
+bool Instance::set_values(const char* call, Type type, const std::uint32_t* vrs, std::size_t n, const T* values,
+                          std::size_t n_values) {
+  if (state_ != State::kInstantiated && state_ != State::kInitialization && state_ != State::kStep) {
+    return in(State::kStep, call);
+  }
+  if (n != n_values || (n > 0 && (vrs == nullptr || values == nullptr))) {
+    return fail(std::string(call) + ": " + std::to_string(n) + " value references but " + std::to_string(n_values) +
+                " values (every variable is a scalar)");
+  }
+  // all checked before any is applied: a refused call changes nothing
+  for (std::size_t i = 0; i < n; ++i) {
+    if (vrs[i] >= values_.size()) {
+      return fail(std::string(call) + ": value reference " + std::to_string(vrs[i]) + " is not one of this FMU's");
+    }
+    const Variable& v = description_.variables[vrs[i]];
+    if (v.causality != Causality::kInput) {
+      return fail(std::string(call) + ": " + v.name + " is an output" +
+                  (ecu_ == EcuMode::kBuiltin ? " (this FMU has no inputs: its built-in ECU drives the plant; "
+                                               "`ehpt fmu --ecu none` makes the command fields inputs)"
+                                             : ""));
+    }
+    if (v.type != type) {
+      return fail(std::string(call) + ": " + v.name + " is a " + type_name(v.type) + " variable");
+    }
+    if constexpr (std::is_floating_point_v<T>) {
+      if (!std::isfinite(values[i])) {
+        return fail(std::string(call) + ": " + v.name + " = " + io::number_text(values[i]) +
+                    ": not a finite number (refused, not applied)");
+      }
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i) values_[vrs[i]] = static_cast<double>(values[i]);
+  return true;
+}
+
+bool Instance::get_float64(const std::uint32_t* vrs, std::size_t n, double* values, std::size_t n_values) {
+  return get_values("fmi3GetFloat64", Type::kFloat64, vrs, n, values, n_values);
+}
+bool Instance::get_boolean(const std::uint32_t* vrs, std::size_t n, bool* values, std::size_t n_values) {
+  return get_values("fmi3GetBoolean", Type::kBoolean, vrs, n, values, n_values);
+}
+bool Instance::set_float64(const std::uint32_t* vrs, std::size_t n, const double* values, std::size_t n_values) {
+  return set_values("fmi3SetFloat64", Type::kFloat64, vrs, n, values, n_values);
+}
+bool Instance::set_boolean(const std::uint32_t* vrs, std::size_t n, const bool* values, std::size_t n_values) {
+  return set_values("fmi3SetBoolean", Type::kBoolean, vrs, n, values, n_values);
 }
 
 bool Instance::terminate() {
@@ -198,9 +301,13 @@ bool Instance::reset() {
     return fail("fmi3Reset: the scenario no longer loads");
   }
   sc_ = std::move(sc);
-  std::fill(outputs_.begin(), outputs_.end(), 0.0);
+  for (const Variable& v : description_.variables) values_[v.vr] = v.start;
+  psd_sensors_ = {};
+  ev_sensors_ = {};
+  psd_command_ = {};
+  ev_command_ = {};
   state_ = State::kInstantiated;
-  (void)kOk;
+  (void)kWarning;
   return true;
 }
 

@@ -11,6 +11,7 @@
 //   token <the instantiationToken of modelDescription.xml>
 //   scenario <its path inside resources/>
 //   set <key=value>            (each `ehpt fmu --set`, in order)
+//   ecu none                   (--ecu none: the importer is the ECU)
 
 #include <cstdint>
 #include <memory>
@@ -19,6 +20,8 @@
 
 #include "hil/config/config.hpp"
 #include "hil/run/simulation.hpp"
+#include "msgs/ev.hpp"
+#include "msgs/psd.hpp"
 #include "targets/fmu/fmu_description.hpp"
 
 namespace ehpt::fmu {
@@ -47,6 +50,11 @@ class Instance {
   // FMI: fmi3Discard with terminateSimulation), as `ehpt run` ends with exit 3
   bool do_step(double current_s, double step_s, double& reached_s, bool& stopped);
   bool get_float64(const std::uint32_t* vrs, std::size_t n, double* values, std::size_t n_values);
+  bool get_boolean(const std::uint32_t* vrs, std::size_t n, bool* values, std::size_t n_values);
+  // Inputs only (--ecu none: the command's fields), before or between steps; a value that is
+  // not finite is refused (as every other way in refuses one) and not applied.
+  bool set_float64(const std::uint32_t* vrs, std::size_t n, const double* values, std::size_t n_values);
+  bool set_boolean(const std::uint32_t* vrs, std::size_t n, const bool* values, std::size_t n_values);
   bool terminate();
   bool reset();
 
@@ -54,9 +62,18 @@ class Instance {
 
  private:
   enum class State { kInstantiated, kInitialization, kStep, kTerminated, kError };
-  Instance(hil::Scenario sc, std::string scenario_path, std::vector<std::string> sets, Log log);
+  Instance(hil::Scenario sc, std::string scenario_path, std::vector<std::string> sets, EcuMode ecu, Log log);
   bool fail(const std::string& message);
   bool in(State s, const char* call);
+  // the variables' values at the current point: signals, and (--ecu none) the sensor message
+  void refresh_outputs();
+  // the command from the inputs, to the simulation (--ecu none)
+  void apply_inputs();
+  template <class T>
+  bool set_values(const char* call, Type type, const std::uint32_t* vrs, std::size_t n, const T* values,
+                  std::size_t n_values);
+  template <class T>
+  bool get_values(const char* call, Type type, const std::uint32_t* vrs, std::size_t n, T* values, std::size_t n_values);
 
   hil::Scenario sc_;
   std::string scenario_path_;  // reloaded when the importer asks for another stop time
@@ -66,7 +83,12 @@ class Instance {
   State state_ = State::kInstantiated;
   double stop_s_ = 0.0;
   std::unique_ptr<hil::Simulation> sim_;
-  std::vector<double> outputs_;  // the outputs at the current communication point, by value reference
+  EcuMode ecu_;
+  std::vector<double> values_;   // every variable's value at the current point, by value reference
+  msgs::PsdSensors psd_sensors_{};
+  msgs::EvSensors ev_sensors_{};
+  msgs::PsdCommand psd_command_{};
+  msgs::EvCommand ev_command_{};
 };
 
 }  // namespace ehpt::fmu

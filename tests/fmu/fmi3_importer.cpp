@@ -62,7 +62,6 @@ bool Fmi3Fmu::open(const std::string& fmu_path, std::string& error) {
   }
   dir = base;
   made_dir_ = true;
-  std::string xml;
   for (const io::ZipEntry& e : entries) {
     const fs::path p = fs::path(dir) / e.name;
     fs::create_directories(p.parent_path());
@@ -82,6 +81,10 @@ bool Fmi3Fmu::open(const std::string& fmu_path, std::string& error) {
     vr[(*it)[1].str()] = static_cast<fmi3ValueReference>(std::stoul((*it)[2].str()));
     if ((*it)[3].str() == "output") output_names.push_back((*it)[1].str());
   }
+  const std::regex boolean("<Boolean name=\"([^\"]*)\" valueReference=\"([0-9]+)\"");
+  for (auto it = std::sregex_iterator(xml.begin(), xml.end(), boolean); it != std::sregex_iterator(); ++it) {
+    boolean_vr[(*it)[1].str()] = static_cast<fmi3ValueReference>(std::stoul((*it)[2].str()));
+  }
   const std::string so = dir + "/binaries/x86_64-linux/" + model_identifier + ".so";
   library_ = dlopen(so.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (library_ == nullptr) {
@@ -93,7 +96,8 @@ bool Fmi3Fmu::open(const std::string& fmu_path, std::string& error) {
          symbol(library_, "fmi3EnterInitializationMode", enter_initialization, error) &&
          symbol(library_, "fmi3ExitInitializationMode", exit_initialization, error) &&
          symbol(library_, "fmi3DoStep", do_step, error) && symbol(library_, "fmi3GetFloat64", get_float64, error) &&
-         symbol(library_, "fmi3SetFloat64", set_float64, error) && symbol(library_, "fmi3Terminate", terminate, error) &&
+         symbol(library_, "fmi3SetFloat64", set_float64, error) && symbol(library_, "fmi3GetBoolean", get_boolean, error) &&
+         symbol(library_, "fmi3SetBoolean", set_boolean, error) && symbol(library_, "fmi3Terminate", terminate, error) &&
          symbol(library_, "fmi3Reset", reset, error) && symbol(library_, "fmi3GetVersion", get_version, error);
 }
 

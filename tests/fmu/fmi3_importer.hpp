@@ -26,7 +26,9 @@ class Fmi3Fmu {
   std::string dir;                         // where it is unpacked
   std::string token, model_identifier;
   double step_s = 0.0, stop_s = 0.0;       // fixedInternalStepSize, DefaultExperiment stopTime
+  std::string xml;                         // modelDescription.xml
   std::map<std::string, fmi3ValueReference> vr;  // Float64 variables by name
+  std::map<std::string, fmi3ValueReference> boolean_vr;  // Boolean variables by name
   std::vector<std::string> output_names;   // causality = "output", in document order
 
   // every message the FMU logged through the callback: "STATUS CATEGORY: MESSAGE"
@@ -39,6 +41,8 @@ class Fmi3Fmu {
   fmi3DoStepTYPE* do_step = nullptr;
   fmi3GetFloat64TYPE* get_float64 = nullptr;
   fmi3SetFloat64TYPE* set_float64 = nullptr;
+  fmi3GetBooleanTYPE* get_boolean = nullptr;
+  fmi3SetBooleanTYPE* set_boolean = nullptr;
   fmi3TerminateTYPE* terminate = nullptr;
   fmi3ResetTYPE* reset = nullptr;
   fmi3GetVersionTYPE* get_version = nullptr;

@@ -74,6 +74,10 @@ def model_description_problems(fmu):
             problems.append("%s: unit %s not declared" % (v.get("name"), v.get("unit")))
         if v.get("causality") == "independent" and (v.get("variability") != "continuous" or v.get("start")):
             problems.append("the independent variable must be continuous without start")
+        if v.get("causality") == "input" and v.get("start") is None:
+            problems.append("%s: an input needs a start value" % v.get("name"))
+        if v.tag == "Boolean" and (v.get("unit") or v.get("variability") == "continuous"):
+            problems.append("%s: a Boolean has no unit and is not continuous" % v.get("name"))
     outputs = [v.get("valueReference") for v in variables if v.get("causality") == "output"]
     listed = [o.get("valueReference") for o in root.find("ModelStructure").iter("Output")]
     if outputs != listed:
@@ -137,6 +141,20 @@ with tempfile.TemporaryDirectory() as tmp:
         if name == "psecu2_nedc":
             psecu2 = (fmu, want)
     check(len(kinds) >= 10, "FMUs of %d vehicle files: %s" % (len(kinds), sorted(kinds)))
+
+    # --ecu none: the message fields as inputs and outputs, for both families; a rig has none
+    for name, inputs in (("psecu2_nedc", 5), ("ev_nedc", 1)):
+        fmu = os.path.join(tmp, name + "_plant.fmu")
+        r = ehpt("fmu", name, "--ecu", "none", "--out", fmu)
+        problems, _ = model_description_problems(fmu) if r.returncode == 0 else (["not built: " + r.stderr], 0)
+        with zipfile.ZipFile(fmu) as z:
+            root = ET.fromstring(z.read("modelDescription.xml"))
+        got = [v.get("name") for v in root.find("ModelVariables") if v.get("causality") == "input"]
+        check(not problems and len(got) == inputs and all(n.startswith("command.") for n in got),
+              "%s --ecu none: %d command inputs %s, complete %s" % (name, inputs, got, problems))
+    r = ehpt("fmu", "battery_cc_discharge", "--ecu", "none", "--out", os.path.join(tmp, "rig.fmu"))
+    check(r.returncode == 2 and "has no bus messages" in r.stderr and not os.path.exists(os.path.join(tmp, "rig.fmu")),
+          "--ecu none on a rig: exit 2, why (%d): %s" % (r.returncode, r.stderr.strip()))
 
     # what ehpt fmu refuses: a path that is there (left as it was), FMI 2.0, a bad --set
     taken = os.path.join(tmp, "taken.fmu")

@@ -16,7 +16,11 @@
 #include <sstream>
 
 #include "fmi3_importer.hpp"
+#include "hil/config/config.hpp"
+#include "hil/run/simulation.hpp"
 #include "io/process.hpp"
+#include "msgs/psd.hpp"
+#include "test_plants.hpp"
 
 namespace ehpt::test {
 namespace {
@@ -223,7 +227,11 @@ TEST_F(Fmu3, WrongCallsAreErrorsWithAMessage) {
     const double v = 1.0;
     double got = 0.0;
     EXPECT_EQ(fmu.set_float64(i, &vr, 1, &v, 1), fmi3Error);
-    EXPECT_TRUE(logged(fmu, "fmi3SetFloat64: every variable of this FMU is an output")) << fmu.log.back();
+    EXPECT_TRUE(logged(fmu, "fmi3SetFloat64: speed_ref_m_s is an output (this FMU has no inputs: its built-in ECU"))
+        << fmu.log.back();
+    EXPECT_EQ(fmu.get_float64(i, &vr, 1, &got, 1), fmi3Error);  // the instance is in error now
+    fmu.free_instance(i);
+    i = initialized("get");
     EXPECT_EQ(fmu.get_float64(i, &bad, 1, &got, 1), fmi3Error);
     EXPECT_TRUE(logged(fmu, "value reference 999 is not one of this FMU's"));
     fmu.free_instance(i);
@@ -239,6 +247,90 @@ TEST_F(Fmu3, WrongCallsAreErrorsWithAMessage) {
   fs::remove(fmu.dir + "/resources/vehicles/psecu2.toml");
   EXPECT_EQ(fmu.make_instance("missing"), nullptr);
   EXPECT_TRUE(logged(fmu, "psecu2.toml")) << (fmu.log.empty() ? "" : fmu.log.back());
+}
+
+// --ecu none: the importer is the ECU. A simple controller (motor torque from the driver's
+// request, engine off) through the FMU's command inputs and sensor outputs gives, bit for bit,
+// what the same controller gives through the Simulation facade's external ECU (the path of the
+// Python module and of a bus ECU): every output and every sensor field at every ECU sample.
+TEST_F(Fmu3, WithoutItsEcuTheImporterDrivesThePlantThroughTheMessageFields) {
+  ASSERT_EQ(ehpt({"fmu", "psecu2_nedc", "--ecu", "none", "--set", "solver.duration_s=20", "--out", *dir_ + "/n.fmu"}), 0);
+  Fmi3Fmu fmu;
+  std::string error;
+  ASSERT_TRUE(fmu.open(*dir_ + "/n.fmu", error)) << error;
+  EXPECT_EQ(fmu.model_identifier, "ehpt_psecu2_nedc_plant");
+  const fmi3ValueReference request = fmu.vr.at("sensors.driverRequest"), mot = fmu.vr.at("command.motTauRef_Nm");
+  fmi3ValueReference ice_on = 0;
+  ASSERT_NE(fmu.xml.find("<Boolean name=\"command.iceON\""), std::string::npos);
+  ice_on = fmu.boolean_vr.at("command.iceON");
+  fmi3Instance inst = fmu.make_instance("plant");
+  ASSERT_NE(inst, nullptr) << (fmu.log.empty() ? "" : fmu.log.back());
+  // before initialization an input takes a value; a NaN is refused and changes nothing
+  const double nan = std::nan("");
+  EXPECT_EQ(fmu.set_float64(inst, &mot, 1, &nan, 1), fmi3Error);
+  EXPECT_TRUE(logged(fmu, "fmi3SetFloat64: command.motTauRef_Nm = nan: not a finite number (refused, not applied)"));
+  fmu.free_instance(inst);
+  inst = fmu.make_instance("plant");
+  ASSERT_EQ(fmu.enter_initialization(inst, fmi3False, 0.0, 0.0, fmi3True, 20.0), fmi3OK);
+  ASSERT_EQ(fmu.exit_initialization(inst), fmi3OK);
+
+  hil::Scenario sc = test::load(test::source_path("scenarios/psecu2_nedc.toml"), {"solver.duration_s=20"});
+  hil::SimulationOptions opt;
+  opt.external_ecu = true;
+  auto sim = hil::make_simulation(sc, opt);
+  std::vector<fmi3ValueReference> refs;
+  for (const std::string& n : fmu.output_names) refs.push_back(fmu.vr.at(n));
+  std::vector<double> y(refs.size());
+  int compared = 0;
+  for (std::int64_t n = 0; n < 2000; ++n) {
+    // the reference: what an external ECU does through the facade
+    msgs::PsdSensors s;
+    ASSERT_TRUE(sim->read_sensors(s));
+    msgs::PsdCommand c;
+    c.motTauRef_Nm = 60.0 * s.driverRequest;
+    c.iceON = false;
+    c.stamp = s.stamp;
+    ASSERT_TRUE(sim->write_command(c));
+    ASSERT_EQ(sim->step(10), 10);
+    // the FMU: the same from its outputs to its inputs
+    double r = 0.0;
+    ASSERT_EQ(fmu.get_float64(inst, &request, 1, &r, 1), fmi3OK);
+    ASSERT_TRUE(same_bits(r, s.driverRequest)) << n;
+    const double torque = 60.0 * r;
+    const fmi3Boolean off = fmi3False;
+    ASSERT_EQ(fmu.set_float64(inst, &mot, 1, &torque, 1), fmi3OK);
+    ASSERT_EQ(fmu.set_boolean(inst, &ice_on, 1, &off, 1), fmi3OK);
+    fmi3Boolean e, term, early;
+    fmi3Float64 last;
+    ASSERT_EQ(fmu.do_step(inst, static_cast<double>(n) * 0.01, 0.01, fmi3True, &e, &term, &early, &last), fmi3OK)
+        << (fmu.log.empty() ? "" : fmu.log.back());
+    ASSERT_EQ(fmu.get_float64(inst, refs.data(), refs.size(), y.data(), y.size()), fmi3OK);
+    const std::span<const double> want = sim->outputs();
+    for (std::size_t j = 0; j < fmu.output_names.size(); ++j) {
+      const std::string& name = fmu.output_names[j];
+      if (name.rfind("sensors.", 0) == 0) continue;  // below
+      const auto& signals = sim->signals();
+      const auto it = std::find_if(signals.begin(), signals.end(), [&](const auto& x) { return x.name == name; });
+      ASSERT_NE(it, signals.end()) << name;
+      ASSERT_TRUE(same_bits(y[j], want[static_cast<std::size_t>(it - signals.begin())]))
+          << name << " at step " << (n + 1) * 10 << ": FMU " << y[j];
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 2000 * 30);
+  EXPECT_GT(sim->outputs()[2], 3.0);  // speed_m_s: the car moved under the importer's torque
+  // the sensor message as the ECU reads it: batSOC equals the plant's soc at the sample
+  const fmi3ValueReference bat = fmu.vr.at("sensors.batSOC");
+  double soc = 0.0;
+  ASSERT_EQ(fmu.get_float64(inst, &bat, 1, &soc, 1), fmi3OK);
+  msgs::PsdSensors last_sensors;
+  ASSERT_TRUE(sim->read_sensors(last_sensors));
+  EXPECT_TRUE(same_bits(soc, last_sensors.batSOC));
+  // an output is not an input; a Boolean is not a Float64
+  const double v = 1.0;
+  EXPECT_EQ(fmu.set_float64(inst, &bat, 1, &v, 1), fmi3Error);
+  EXPECT_TRUE(logged(fmu, "fmi3SetFloat64: sensors.batSOC is an output"));
+  fmu.free_instance(inst);
 }
 
 }  // namespace
