@@ -22,7 +22,7 @@ install(TARGETS ehpt RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT runti
 # the library every FMU carries (ehpt fmu finds it at <bin>/../<libdir>/ehpt/fmu/). Two levels
 # below lib/: cpack's DEB generator adds an ldconfig call (lintian: maintscript-calls-ldconfig)
 # for a shared object in lib/ or one folder below it, and nothing links against this one.
-install(TARGETS ehpt_fmu3 LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/ehpt/fmu COMPONENT runtime)
+install(TARGETS ehpt_fmu3 ehpt_fmu2 LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/ehpt/fmu COMPONENT runtime)
 install(PROGRAMS tools/plot.py tools/plot_expect.py DESTINATION ${CMAKE_INSTALL_LIBEXECDIR}/ehpt COMPONENT runtime)
 # The installed data: its place is known to the installed code (hil/config/scenario.cpp) and to
 # the CMake package (ehpt_DATA_DIR), relative to the prefix.

@@ -30,11 +30,12 @@ namespace ehpt::cli {
 namespace {
 
 const char* kFmuHelp =
-    "usage: ehpt fmu SCENARIO [--fmi 3] [--ecu builtin|none] [--out FILE.fmu] [--set key=value ...]\n"
+    "usage: ehpt fmu SCENARIO [--fmi 3|2] [--ecu builtin|none] [--out FILE.fmu]\n"
+    "                [--set key=value ...]\n"
     "\n"
-    "Builds an FMI 3.0 co-simulation FMU of the scenario for x86_64-linux: its vehicle on the\n"
-    "scenario's cycle, every output of 'ehpt signals SCENARIO' an FMU output (Float64, SI\n"
-    "units), doStep in whole plant steps (fixedInternalStepSize). The FMU holds the scenario,\n"
+    "Builds an FMI 3.0 (or 2.0) co-simulation FMU of the scenario for x86_64-linux: its\n"
+    "vehicle on the scenario's cycle, every output of 'ehpt signals SCENARIO' an FMU output\n"
+    "(Float64, SI units), doStep in whole plant steps (the plant step). The FMU holds the scenario,\n"
     "vehicle, maps and cycle under resources/ and runs where ehpt is not installed.\n"
     "docs/fmu.md: the variables, the calling sequence, and how to import it (FMPy, OMSimulator,\n"
     "Simulink, VEOS, SIL Kit).\n"
@@ -43,7 +44,8 @@ const char* kFmuHelp =
     "  --ecu none       the importer is the ECU: the command message's fields are inputs\n"
     "                   (command.motTauRef_Nm, ...), the sensor message's outputs\n"
     "                   (sensors.batSOC, ...), as an ECU on the bus sees them\n"
-    "  --fmi 3          the FMI version (3.0; FMI 2.0 and parameters: not yet)\n"
+    "  --fmi 3|2        the FMI version: 3.0 (the default) or 2.0 (Simulink, OMSimulator, FMPy\n"
+    "                   and older importers); the same variables and trajectory\n"
     "  --out FILE.fmu   where to write it (default out/<scenario name>.fmu); never over an\n"
     "                   existing file\n"
     "  --set key=value  as for 'ehpt run': the FMU's scenario is the one with these overrides\n";
@@ -75,11 +77,11 @@ fs::path common_root(const std::vector<fs::path>& paths) {
   return root;
 }
 
-std::string documentation_page(const fmu::Description& d, const std::string& id) {
+std::string documentation_page(const fmu::Description& d, const std::string& id, const std::string& fmi) {
   using io::xml_escape;
   std::string h = "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>" + xml_escape(id) +
                   "</title></head><body>\n<h1>" + xml_escape(d.model_name) + "</h1>\n<p>" + xml_escape(d.description) +
-                  "</p>\n<p>An FMI 3.0 co-simulation FMU made by ehpt (BSD-3-Clause): the vehicle on the scenario's "
+                  "</p>\n<p>An FMI " + fmi + ".0 co-simulation FMU made by ehpt (BSD-3-Clause): the vehicle on the scenario's "
                   "cycle, " + (d.ecu == fmu::EcuMode::kNone ? "its ECU the importer (command.* inputs, sensors.* outputs)"
                                                             : "driven by its built-in ECU") +
                   ". Communication steps are whole multiples of " +
@@ -130,10 +132,11 @@ int cmd_fmu(const std::vector<std::string>& args) {
     std::cerr << kFmuHelp;
     return 1;
   }
-  if (fmi != "3") {
-    std::cerr << "--fmi " << fmi << ": this ehpt builds FMI 3.0 FMUs (--fmi 3); FMI 2.0 is not built yet\n";
+  if (fmi != "3" && fmi != "2") {
+    std::cerr << "--fmi " << fmi << ": 3 (FMI 3.0) or 2 (FMI 2.0)\n";
     return 2;
   }
+  const std::string library_name = "libehpt_fmu" + fmi + ".so";
   if (ecu != "builtin" && ecu != "none") {
     std::cerr << "--ecu " << ecu << ": builtin (the scenario's ECU drives the plant) or none (the importer is the ECU)\n";
     return 2;
@@ -184,12 +187,12 @@ int cmd_fmu(const std::vector<std::string>& args) {
   // binaries/: the library (it needs the C and C++ runtimes only: toml++ is compiled in)
   const fs::path self_dir = fs::path(io::self_executable()).parent_path();
   // the build tree (beside ehpt), or the installation (<prefix>/bin/ehpt, <prefix>/<libdir>/ehpt/fmu/)
-  const std::vector<fs::path> candidates{self_dir / "libehpt_fmu3.so",
-                                         self_dir / ".." / EHPT_INSTALL_LIBDIR / "ehpt" / "fmu" / "libehpt_fmu3.so"};
+  const std::vector<fs::path> candidates{self_dir / library_name,
+                                         self_dir / ".." / EHPT_INSTALL_LIBDIR / "ehpt" / "fmu" / library_name};
   const auto library = std::find_if(candidates.begin(), candidates.end(), [&](const fs::path& p) { return fs::exists(p, ec); });
   if (library == candidates.end()) {
-    std::cerr << "error: the FMU library libehpt_fmu3.so is not beside this ehpt (" << candidates[0].string() << ", "
-              << candidates[1].string() << "): build the target ehpt_fmu3, or install ehpt\n";
+    std::cerr << "error: the FMU library " << library_name << " is not beside this ehpt (" << candidates[0].string()
+              << ", " << candidates[1].string() << "): build the target ehpt_fmu" << fmi << ", or install ehpt\n";
     return 1;
   }
   io::ZipEntry so{"binaries/x86_64-linux/" + id + ".so", ""};
@@ -214,7 +217,7 @@ int cmd_fmu(const std::vector<std::string>& args) {
   std::string digest_input;
   for (const io::ZipEntry& e : entries) digest_input += e.name + '\0' + io::sha256_hex(e.data) + '\n';
   for (const std::string& s : sets) digest_input += "set " + s + '\n';
-  digest_input += "ecu " + ecu + '\n';
+  digest_input += "ecu " + ecu + "\nfmi " + fmi + '\n';
   const std::string token = "{" + io::sha256_hex(digest_input).substr(0, 32) + "}";
   std::string manifest = "# ehpt fmu 1\ntoken " + token + "\nscenario " + scenario_rel + "\n";
   for (const std::string& s : sets) manifest += "set " + s + "\n";
@@ -223,8 +226,10 @@ int cmd_fmu(const std::vector<std::string>& args) {
 
   const fmu::Description d = fmu::describe(sc, mode);
   const std::string tool = "ehpt " + std::string(hil::build_info().version);
-  entries.insert(entries.begin(), io::ZipEntry{"modelDescription.xml", fmu::model_description_3(d, id, token, tool)});
-  entries.push_back({"documentation/index.html", documentation_page(d, id)});
+  entries.insert(entries.begin(), io::ZipEntry{"modelDescription.xml", fmi == "3"
+                                                                            ? fmu::model_description_3(d, id, token, tool)
+                                                                            : fmu::model_description_2(d, id, token, tool)});
+  entries.push_back({"documentation/index.html", documentation_page(d, id, fmi)});
 
   std::string archive;
   if (!io::zip_store(entries, archive, error)) {
@@ -242,7 +247,7 @@ int cmd_fmu(const std::vector<std::string>& args) {
     outputs += v.causality == fmu::Causality::kOutput ? 1 : 0;
     inputs += v.causality == fmu::Causality::kInput ? 1 : 0;
   }
-  return out("fmu           " + out_path + ": FMI 3.0 co-simulation, modelIdentifier " + id + ", " +
+  return out("fmu           " + out_path + ": FMI " + fmi + ".0 co-simulation, modelIdentifier " + id + ", " +
              std::to_string(inputs) + " inputs, " + std::to_string(outputs) + " outputs, step " +
              io::number_text(d.step_s) + " s, stop " +
              io::number_text(d.stop_s) + " s, " + std::to_string(entries.size()) + " files, " +

@@ -56,6 +56,31 @@ std::string number(double v) {
   return buf;
 }
 
+std::string unit_definitions(const Description& d) {
+  std::map<std::string, const UnitRow*> units;
+  for (const Variable& v : d.variables) {
+    if (v.unit.empty()) continue;
+    for (const UnitRow& u : kUnits) {
+      if (v.unit == u.unit) units.emplace(v.unit, &u);
+    }
+  }
+  std::string x;
+  if (units.empty()) return x;
+  x += "  <UnitDefinitions>\n";
+  for (const auto& [name, u] : units) {
+    x += "    <Unit name=\"" + io::xml_escape(name) + "\"><BaseUnit";
+    if (u->kg != 0) x += " kg=\"" + std::to_string(u->kg) + "\"";
+    if (u->m != 0) x += " m=\"" + std::to_string(u->m) + "\"";
+    if (u->s != 0) x += " s=\"" + std::to_string(u->s) + "\"";
+    if (u->A != 0) x += " A=\"" + std::to_string(u->A) + "\"";
+    if (name == "rad" || name == "rad/s") x += " rad=\"1\"";
+    if (u->factor != 1.0) x += " factor=\"" + number(u->factor) + "\"";
+    x += "/></Unit>\n";
+  }
+  x += "  </UnitDefinitions>\n";
+  return x;
+}
+
 }  // namespace
 
 std::string fmi_unit(std::string_view field_unit) {
@@ -170,27 +195,7 @@ std::string model_description_3(const Description& d, const std::string& model_i
        "\" canBeInstantiatedOnlyOncePerProcess=\"false\" canGetAndSetFMUState=\"false\" canSerializeFMUState=\"false\""
        " providesIntermediateUpdate=\"false\" mightReturnEarlyFromDoStep=\"false\""
        " canReturnEarlyAfterIntermediateUpdate=\"false\" hasEventMode=\"false\"/>\n";
-  std::map<std::string, const UnitRow*> units;
-  for (const Variable& v : d.variables) {
-    if (v.unit.empty()) continue;
-    for (const UnitRow& u : kUnits) {
-      if (v.unit == u.unit) units.emplace(v.unit, &u);
-    }
-  }
-  if (!units.empty()) {
-    x += "  <UnitDefinitions>\n";
-    for (const auto& [name, u] : units) {
-      x += "    <Unit name=\"" + xml_escape(name) + "\"><BaseUnit";
-      if (u->kg != 0) x += " kg=\"" + std::to_string(u->kg) + "\"";
-      if (u->m != 0) x += " m=\"" + std::to_string(u->m) + "\"";
-      if (u->s != 0) x += " s=\"" + std::to_string(u->s) + "\"";
-      if (u->A != 0) x += " A=\"" + std::to_string(u->A) + "\"";
-      if (name == "rad" || name == "rad/s") x += " rad=\"1\"";
-      if (u->factor != 1.0) x += " factor=\"" + number(u->factor) + "\"";
-      x += "/></Unit>\n";
-    }
-    x += "  </UnitDefinitions>\n";
-  }
+  x += unit_definitions(d);
   x += "  <DefaultExperiment startTime=\"0\" stopTime=\"" + number(d.stop_s) + "\" stepSize=\"" + number(d.step_s) +
        "\"/>\n";
   x += "  <ModelVariables>\n";
@@ -221,6 +226,58 @@ std::string model_description_3(const Description& d, const std::string& model_i
     if (v.causality == Causality::kOutput) x += "    <Output valueReference=\"" + std::to_string(v.vr) + "\"/>\n";
   }
   x += "  </ModelStructure>\n</fmiModelDescription>\n";
+  return x;
+}
+
+}  // namespace ehpt::fmu
+
+namespace ehpt::fmu {
+
+std::string model_description_2(const Description& d, const std::string& model_identifier, const std::string& guid,
+                                const std::string& generation_tool) {
+  using io::xml_escape;
+  std::string x = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
+  x += "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"" + xml_escape(d.model_name) + "\" guid=\"" +
+       xml_escape(guid) + "\" description=\"" + xml_escape(d.description) + "\" generationTool=\"" +
+       xml_escape(generation_tool) + "\" variableNamingConvention=\"flat\">\n";
+  x += "  <CoSimulation modelIdentifier=\"" + xml_escape(model_identifier) +
+       "\" canHandleVariableCommunicationStepSize=\"true\" canInterpolateInputs=\"false\""
+       " canRunAsynchronuously=\"false\" canBeInstantiatedOnlyOncePerProcess=\"false\""
+       " canNotUseMemoryManagementFunctions=\"true\" canGetAndSetFMUstate=\"false\" canSerializeFMUstate=\"false\"/>\n";
+  x += unit_definitions(d);
+  x += "  <DefaultExperiment startTime=\"0\" stopTime=\"" + number(d.stop_s) + "\" stepSize=\"" + number(d.step_s) +
+       "\"/>\n";
+  x += "  <ModelVariables>\n";
+  // FMI 2.0 numbers the ScalarVariables from 1 in document order (ModelStructure refers to them)
+  std::vector<std::size_t> index_of(d.variables.size(), 0);
+  std::size_t index = 0;
+  for (const Variable& v : d.variables) {
+    if (v.causality == Causality::kIndependent) continue;  // FMI 2.0 co-simulation: time is the master's
+    index_of[v.vr] = ++index;
+    const bool boolean = v.type == Type::kBoolean;
+    x += "    <ScalarVariable name=\"" + xml_escape(v.name) + "\" valueReference=\"" + std::to_string(v.vr) + "\"";
+    if (!v.description.empty()) x += " description=\"" + xml_escape(v.description) + "\"";
+    const char* variability = boolean || v.source == Source::kSensor ? "discrete" : "continuous";
+    if (v.causality == Causality::kInput) {
+      x += std::string(" causality=\"input\" variability=\"") + (boolean ? "discrete" : "continuous") + "\">";
+      x += boolean ? std::string("<Boolean start=\"") + (v.start != 0.0 ? "true" : "false") + "\"/>"
+                   : "<Real start=\"" + number(v.start) + "\"" + (v.unit.empty() ? "" : " unit=\"" + xml_escape(v.unit) + "\"") + "/>";
+    } else {
+      x += std::string(" causality=\"output\" variability=\"") + variability + "\" initial=\"calculated\">";
+      x += boolean ? std::string("<Boolean/>") : "<Real" + (v.unit.empty() ? std::string() : " unit=\"" + xml_escape(v.unit) + "\"") + "/>";
+    }
+    x += "</ScalarVariable>\n";
+  }
+  x += "  </ModelVariables>\n  <ModelStructure>\n    <Outputs>\n";
+  for (const Variable& v : d.variables) {
+    if (v.causality == Causality::kOutput) x += "      <Unknown index=\"" + std::to_string(index_of[v.vr]) + "\"/>\n";
+  }
+  // every output is calculated at initialization: each is an initial unknown
+  x += "    </Outputs>\n    <InitialUnknowns>\n";
+  for (const Variable& v : d.variables) {
+    if (v.causality == Causality::kOutput) x += "      <Unknown index=\"" + std::to_string(index_of[v.vr]) + "\"/>\n";
+  }
+  x += "    </InitialUnknowns>\n  </ModelStructure>\n</fmiModelDescription>\n";
   return x;
 }
 

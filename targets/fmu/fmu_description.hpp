@@ -61,5 +61,9 @@ std::string fmi_unit(std::string_view field_unit);
 // checks; generation_tool: "ehpt VERSION".
 std::string model_description_3(const Description& d, const std::string& model_identifier, const std::string& token,
                                 const std::string& generation_tool);
+// The same as FMI 2.0 (co-simulation; ScalarVariable, the guid, ModelStructure by index); time
+// is FMI 2.0's own (no variable).
+std::string model_description_2(const Description& d, const std::string& model_identifier, const std::string& guid,
+                                const std::string& generation_tool);
 
 }  // namespace ehpt::fmu

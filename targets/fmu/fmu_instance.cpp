@@ -26,18 +26,30 @@ const char* type_name(Type t) { return t == Type::kBoolean ? "Boolean" : "Float6
 
 }  // namespace
 
-Instance::Instance(hil::Scenario sc, std::string scenario_path, std::vector<std::string> sets, EcuMode ecu, Log log)
+Instance::Instance(hil::Scenario sc, std::string scenario_path, std::vector<std::string> sets, EcuMode ecu, Log log,
+                   Fmi fmi)
     : sc_(std::move(sc)),
       scenario_path_(std::move(scenario_path)),
       sets_(std::move(sets)),
       log_(log),
       description_(describe(sc_, ecu)),
-      ecu_(ecu) {
+      ecu_(ecu),
+      fmi_(fmi) {
   values_.assign(description_.variables.size(), 0.0);
   for (const Variable& v : description_.variables) values_[v.vr] = v.start;
 }
 
-std::unique_ptr<Instance> Instance::make(const std::string& resource_dir, const std::string& token, Log log) {
+const char* Instance::name(Call c) const {
+  static const char* const fmi3[] = {"fmi3EnterInitializationMode", "fmi3ExitInitializationMode", "fmi3DoStep",
+                                     "fmi3GetFloat64", "fmi3GetBoolean", "fmi3SetFloat64", "fmi3SetBoolean",
+                                     "fmi3Terminate", "fmi3Reset"};
+  static const char* const fmi2[] = {"fmi2EnterInitializationMode", "fmi2ExitInitializationMode", "fmi2DoStep",
+                                     "fmi2GetReal", "fmi2GetBoolean", "fmi2SetReal", "fmi2SetBoolean",
+                                     "fmi2Terminate", "fmi2Reset"};
+  return (fmi_ == Fmi::k3 ? fmi3 : fmi2)[static_cast<int>(c)];
+}
+
+std::unique_ptr<Instance> Instance::make(const std::string& resource_dir, const std::string& token, Log log, Fmi fmi) {
   std::string dir = resource_dir;
   if (!dir.empty() && dir.back() != '/') dir += '/';
   const std::string manifest = dir + kManifestName;
@@ -62,7 +74,7 @@ std::unique_ptr<Instance> Instance::make(const std::string& resource_dir, const 
   }
   if (token != own_token) {
     log(kError, "logStatusError",
-        "instantiationToken \"" + token + "\" is not this FMU's (\"" + own_token +
+        std::string(fmi == Fmi::k3 ? "instantiationToken" : "guid") + " \"" + token + "\" is not this FMU's (\"" + own_token +
             "\"): the modelDescription.xml and the resources are of different FMUs");
     return nullptr;
   }
@@ -72,7 +84,7 @@ std::unique_ptr<Instance> Instance::make(const std::string& resource_dir, const 
     for (const std::string& e : errors) log(kError, "logStatusError", e);
     return nullptr;
   }
-  return std::unique_ptr<Instance>(new Instance(std::move(sc), dir + scenario, std::move(sets), ecu, log));
+  return std::unique_ptr<Instance>(new Instance(std::move(sc), dir + scenario, std::move(sets), ecu, log, fmi));
 }
 
 bool Instance::fail(const std::string& message) {
@@ -88,7 +100,7 @@ bool Instance::in(State s, const char* call) {
 }
 
 bool Instance::enter_initialization(bool stop_defined, double start_s, double stop_s) {
-  if (!in(State::kInstantiated, "fmi3EnterInitializationMode")) return false;
+  if (!in(State::kInstantiated, name(Call::kEnterInitialization))) return false;
   if (!std::isfinite(start_s) || start_s != 0.0) {
     return fail("startTime = " + io::number_text(start_s) + ": an ehpt FMU starts at 0 s (its cycle's start)");
   }
@@ -152,7 +164,7 @@ void Instance::apply_inputs() {
 }
 
 bool Instance::exit_initialization() {
-  if (!in(State::kInitialization, "fmi3ExitInitializationMode")) return false;
+  if (!in(State::kInitialization, name(Call::kExitInitialization))) return false;
   hil::SimulationOptions opt;
   opt.columns = {0};  // the runner records time only: the FMU's outputs are read at each point
   opt.chunk_steps = kChunkSteps;
@@ -166,28 +178,29 @@ bool Instance::exit_initialization() {
 
 bool Instance::do_step(double current_s, double step_s, double& reached_s, bool& stopped) {
   stopped = false;
-  if (!in(State::kStep, "fmi3DoStep")) return false;
+  if (!in(State::kStep, name(Call::kDoStep))) return false;
   const double h = sc_.solver.step_s;
   const double now_s = sim_->time_s();
   reached_s = now_s;
   // the importer's grid must be the plant's: whole steps, within a small tolerance
   if (!std::isfinite(current_s) || std::abs(current_s - now_s) > 1e-9 * std::max(1.0, std::abs(now_s))) {
-    return fail("fmi3DoStep: currentCommunicationPoint = " + io::number_text(current_s) + " s, but the FMU is at " +
+    return fail(std::string(name(Call::kDoStep)) + ": currentCommunicationPoint = " + io::number_text(current_s) + " s, but the FMU is at " +
                 io::number_text(now_s) + " s");
   }
   if (!std::isfinite(step_s) || step_s <= 0.0) {
-    return fail("fmi3DoStep: communicationStepSize = " + io::number_text(step_s) + ": must be > 0");
+    return fail(std::string(name(Call::kDoStep)) + ": communicationStepSize = " + io::number_text(step_s) + ": must be > 0");
   }
   const double steps = step_s / h;
   const double whole = std::nearbyint(steps);
   if (whole < 1.0 || std::abs(steps - whole) > 1e-6 || whole > 9.0e15) {
-    return fail("fmi3DoStep: communicationStepSize = " + io::number_text(step_s) + " s is not a whole number of plant steps (" +
-                io::number_text(h) + " s, fixedInternalStepSize): use a multiple of it");
+    return fail(std::string(name(Call::kDoStep)) + ": communicationStepSize = " + io::number_text(step_s) + " s is not a whole number of plant steps (" +
+                io::number_text(h) + " s): use a multiple of it");
   }
   const std::int64_t n = static_cast<std::int64_t>(whole);
   if (n > sim_->total_steps() - sim_->step_index()) {
-    return fail("fmi3DoStep: to " + io::number_text(now_s + step_s) + " s, past the stop time " + io::number_text(stop_s_) +
-                " s (set stopTime in fmi3EnterInitializationMode)");
+    return fail(std::string(name(Call::kDoStep)) + ": to " + io::number_text(now_s + step_s) + " s, past the stop time " + io::number_text(stop_s_) +
+                " s (" + (fmi_ == Fmi::k3 ? "stopTime of fmi3EnterInitializationMode" : "stopTime of fmi2SetupExperiment") +
+                " sets it)");
   }
   if (ecu_ == EcuMode::kNone) apply_inputs();  // the inputs act over this step
   std::int64_t left = n;
@@ -274,20 +287,20 @@ bool Instance::set_values(const char* call, Type type, const std::uint32_t* vrs,
 }
 
 bool Instance::get_float64(const std::uint32_t* vrs, std::size_t n, double* values, std::size_t n_values) {
-  return get_values("fmi3GetFloat64", Type::kFloat64, vrs, n, values, n_values);
+  return get_values(name(Call::kGetReal), Type::kFloat64, vrs, n, values, n_values);
 }
 bool Instance::get_boolean(const std::uint32_t* vrs, std::size_t n, bool* values, std::size_t n_values) {
-  return get_values("fmi3GetBoolean", Type::kBoolean, vrs, n, values, n_values);
+  return get_values(name(Call::kGetBoolean), Type::kBoolean, vrs, n, values, n_values);
 }
 bool Instance::set_float64(const std::uint32_t* vrs, std::size_t n, const double* values, std::size_t n_values) {
-  return set_values("fmi3SetFloat64", Type::kFloat64, vrs, n, values, n_values);
+  return set_values(name(Call::kSetReal), Type::kFloat64, vrs, n, values, n_values);
 }
 bool Instance::set_boolean(const std::uint32_t* vrs, std::size_t n, const bool* values, std::size_t n_values) {
-  return set_values("fmi3SetBoolean", Type::kBoolean, vrs, n, values, n_values);
+  return set_values(name(Call::kSetBoolean), Type::kBoolean, vrs, n, values, n_values);
 }
 
 bool Instance::terminate() {
-  if (state_ != State::kStep && state_ != State::kInitialization) return in(State::kStep, "fmi3Terminate");
+  if (state_ != State::kStep && state_ != State::kInitialization) return in(State::kStep, name(Call::kTerminate));
   state_ = State::kTerminated;
   return true;
 }
@@ -298,7 +311,7 @@ bool Instance::reset() {
   hil::Scenario sc;
   if (!hil::load_scenario(scenario_path_, sets_, sc, errors)) {
     for (const std::string& e : errors) log_(kError, "logStatusError", e);
-    return fail("fmi3Reset: the scenario no longer loads");
+    return fail(std::string(name(Call::kReset)) + ": the scenario no longer loads");
   }
   sc_ = std::move(sc);
   for (const Variable& v : description_.variables) values_[v.vr] = v.start;

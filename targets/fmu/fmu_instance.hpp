@@ -37,13 +37,18 @@ struct Log {
   }
 };
 
+// Which standard's functions call in: the names its messages give the calls.
+enum class Fmi { k2, k3 };
+
 class Instance {
  public:
-  // nullptr if the resources do not hold a loadable scenario or the token is not theirs (logged).
-  static std::unique_ptr<Instance> make(const std::string& resource_dir, const std::string& token, Log log);
+  // nullptr if the resources do not hold a loadable scenario or the token (FMI 2: the guid) is
+  // not theirs (logged).
+  static std::unique_ptr<Instance> make(const std::string& resource_dir, const std::string& token, Log log,
+                                        Fmi fmi = Fmi::k3);
 
-  // The calling sequence (FMI 3.0 co-simulation, §4): each false is logged, and the instance is
-  // then in error (every later call but free fails).
+  // The calling sequence (FMI 3.0 co-simulation, §4; FMI 2.0 §4.2.4 the same states): each
+  // false is logged, and the instance is then in error (every later call but free fails).
   bool enter_initialization(bool stop_defined, double start_s, double stop_s);
   bool exit_initialization();
   // stopped: the plant stopped on a fault before the step's end (reached_s says where; logged;
@@ -62,7 +67,10 @@ class Instance {
 
  private:
   enum class State { kInstantiated, kInitialization, kStep, kTerminated, kError };
-  Instance(hil::Scenario sc, std::string scenario_path, std::vector<std::string> sets, EcuMode ecu, Log log);
+  enum class Call { kEnterInitialization, kExitInitialization, kDoStep, kGetReal, kGetBoolean, kSetReal, kSetBoolean,
+                    kTerminate, kReset };
+  Instance(hil::Scenario sc, std::string scenario_path, std::vector<std::string> sets, EcuMode ecu, Log log, Fmi fmi);
+  const char* name(Call c) const;
   bool fail(const std::string& message);
   bool in(State s, const char* call);
   // the variables' values at the current point: signals, and (--ecu none) the sensor message
@@ -84,6 +92,7 @@ class Instance {
   double stop_s_ = 0.0;
   std::unique_ptr<hil::Simulation> sim_;
   EcuMode ecu_;
+  Fmi fmi_;
   std::vector<double> values_;   // every variable's value at the current point, by value reference
   msgs::PsdSensors psd_sensors_{};
   msgs::EvSensors ev_sensors_{};

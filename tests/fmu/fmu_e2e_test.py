@@ -4,14 +4,16 @@
 
     /usr/bin/python3 tests/fmu/fmu_e2e_test.py EHPT FMU_RUN SOURCE_DIR [clean]
 
-For every shipped scenario (every vehicle kind): `ehpt fmu` (2 s), then
+For every shipped scenario (every vehicle kind): `ehpt fmu` (2 s, FMI 3.0 and FMI 2.0), then
 - modelDescription.xml is well formed (xmllint) and has what FMI 3.0 requires of it: fmiVersion,
   a non-empty instantiationToken, CoSimulation with modelIdentifier whose library is in
   binaries/x86_64-linux/, exactly one independent variable, valueReferences unique, causality
   and variability from the standard's sets, every unit declared in UnitDefinitions, the
   ModelStructure's Outputs exactly the output variables in order, a DefaultExperiment;
 - the FMU run by fmu_run in communication steps of 10 plant steps prints the rows of `ehpt run`'s
-  timeseries.csv (output.interval_s = 10 steps), character for character.
+  timeseries.csv (output.interval_s = 10 steps), character for character;
+- FMI 2.0: what it requires (one type element per ScalarVariable, value references unique per
+  type, Outputs and InitialUnknowns by 1-based index, inputs with start), and the same rows.
 With `clean`: one FMU run where nothing of ehpt is reachable: a mount namespace with an empty
 tmpfs over the source (and build) tree and over an installed /usr/share/ehpt, and the system's
 libtomlplusplus.so.3 hidden (the FMU's library has toml++ compiled in); the rows are again
@@ -41,12 +43,55 @@ def ehpt(*args):
     return subprocess.run([EHPT] + list(args), capture_output=True, text=True, timeout=300)
 
 
+def model_description_problems_2(root, names):
+    """What FMI 2.0 requires of a co-simulation modelDescription.xml."""
+    problems = []
+    if root.get("fmiVersion") != "2.0" or not root.get("guid") or not root.get("modelName"):
+        problems.append("fmiVersion 2.0, guid, modelName")
+    cs = root.find("CoSimulation")
+    if cs is None or "binaries/x86_64-linux/%s.so" % cs.get("modelIdentifier") not in names:
+        problems.append("CoSimulation modelIdentifier and its library")
+    units = {u.get("name") for u in root.iter("Unit")}
+    variables = list(root.find("ModelVariables"))
+    seen = set()
+    for v in variables:
+        typed = [c for c in v if c.tag in ("Real", "Integer", "Boolean", "String", "Enumeration")]
+        if v.tag != "ScalarVariable" or len(typed) != 1:
+            problems.append("%s: a ScalarVariable with one type element" % v.get("name"))
+            continue
+        key = (typed[0].tag, v.get("valueReference"))
+        if key in seen:
+            problems.append("%s: valueReference repeats within %s" % key)
+        seen.add(key)
+        if v.get("causality") not in ("parameter", "calculatedParameter", "input", "output", "local", "independent"):
+            problems.append("%s: causality" % v.get("name"))
+        if v.get("variability") not in ("constant", "fixed", "tunable", "discrete", "continuous"):
+            problems.append("%s: variability" % v.get("name"))
+        if v.get("causality") == "input" and typed[0].get("start") is None:
+            problems.append("%s: an input needs a start value" % v.get("name"))
+        if v.get("causality") == "output" and typed[0].get("start") is not None and v.get("initial") == "calculated":
+            problems.append("%s: a calculated output has no start" % v.get("name"))
+        if typed[0].get("unit") and typed[0].get("unit") not in units:
+            problems.append("%s: unit not declared" % v.get("name"))
+    outputs = [str(i + 1) for i, v in enumerate(variables) if v.get("causality") == "output"]
+    structure = root.find("ModelStructure")
+    listed = [u.get("index") for u in structure.find("Outputs")] if structure.find("Outputs") is not None else []
+    initial = [u.get("index") for u in structure.find("InitialUnknowns")] if structure.find("InitialUnknowns") is not None else []
+    if outputs != listed:
+        problems.append("ModelStructure Outputs are not the outputs (1-based indices)")
+    if initial != outputs:
+        problems.append("InitialUnknowns are not the calculated outputs")
+    return problems, float(root.find("DefaultExperiment").get("stepSize"))
+
+
 def model_description_problems(fmu):
     with zipfile.ZipFile(fmu) as z:
         names = set(z.namelist())
         md = z.read("modelDescription.xml")
     problems = []
     root = ET.fromstring(md)
+    if root.get("fmiVersion") == "2.0":
+        return model_description_problems_2(root, names)
     if root.tag != "fmiModelDescription" or root.get("fmiVersion") != "3.0":
         problems.append("root element / fmiVersion")
     for a in ("modelName", "instantiationToken"):
@@ -140,6 +185,15 @@ with tempfile.TemporaryDirectory() as tmp:
                 err + got.stderr[-300:])))
         if name == "psecu2_nedc":
             psecu2 = (fmu, want)
+        # FMI 2.0: the same rows
+        fmu2 = os.path.join(tmp, name + "_2.fmu")
+        r = ehpt("fmu", name, "--fmi", "2", "--set", "solver.duration_s=2", "--out", fmu2)
+        problems2, _ = model_description_problems(fmu2) if r.returncode == 0 else (["not built: " + r.stderr[-200:]], 0)
+        got2 = subprocess.run([FMU_RUN, fmu2, "10", "2"], capture_output=True, text=True, timeout=300)
+        rows2 = project(got2.stdout.splitlines(), want[0].split(",") if want else [])
+        check(not problems2 and want is not None and rows2 == want,
+              "%s: FMI 2.0: modelDescription complete %s, the same rows (%d)%s" % (
+                  name, problems2, len(rows2), "" if rows2 == want else " " + got2.stderr[-300:]))
     check(len(kinds) >= 10, "FMUs of %d vehicle files: %s" % (len(kinds), sorted(kinds)))
 
     # --ecu none: the message fields as inputs and outputs, for both families; a rig has none
@@ -156,16 +210,16 @@ with tempfile.TemporaryDirectory() as tmp:
     check(r.returncode == 2 and "has no bus messages" in r.stderr and not os.path.exists(os.path.join(tmp, "rig.fmu")),
           "--ecu none on a rig: exit 2, why (%d): %s" % (r.returncode, r.stderr.strip()))
 
-    # what ehpt fmu refuses: a path that is there (left as it was), FMI 2.0, a bad --set
+    # what ehpt fmu refuses: a path that is there (left as it was), FMI 1.0, a bad --set
     taken = os.path.join(tmp, "taken.fmu")
     with open(taken, "w") as f:
         f.write("mine")
     r = ehpt("fmu", "psecu2_nedc", "--out", taken)
     check(r.returncode == 2 and "is there already" in r.stderr and open(taken).read() == "mine",
           "--out over an existing file: exit 2, the file untouched (%d): %s" % (r.returncode, r.stderr.strip()))
-    r = ehpt("fmu", "psecu2_nedc", "--fmi", "2", "--out", os.path.join(tmp, "two.fmu"))
-    check(r.returncode == 2 and "FMI 2.0 is not built yet" in r.stderr and not os.path.exists(os.path.join(tmp, "two.fmu")),
-          "--fmi 2: exit 2, nothing written (%d): %s" % (r.returncode, r.stderr.strip()))
+    r = ehpt("fmu", "psecu2_nedc", "--fmi", "1", "--out", os.path.join(tmp, "one.fmu"))
+    check(r.returncode == 2 and "3 (FMI 3.0) or 2 (FMI 2.0)" in r.stderr and not os.path.exists(os.path.join(tmp, "one.fmu")),
+          "--fmi 1: exit 2, nothing written (%d): %s" % (r.returncode, r.stderr.strip()))
     r = ehpt("fmu", "psecu2_nedc", "--set", "vehicle.vehicle.mass_kg=-5", "--out", os.path.join(tmp, "bad.fmu"))
     check(r.returncode == 2 and "mass_kg" in r.stderr and not os.path.exists(os.path.join(tmp, "bad.fmu")),
           "a bad --set: exit 2 with the load message, nothing written (%d): %s" % (r.returncode, r.stderr.strip()[-200:]))

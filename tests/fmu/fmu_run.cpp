@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// The project's FMI 3.0 importer as a program: runs an FMU from 0 to STOP_S in communication
+// The project's FMI 3.0 and 2.0 importer as a program: runs an FMU from 0 to STOP_S in communication
 // steps of K plant steps and prints a CSV as `ehpt run` writes timeseries.csv (time_s, then the
 // outputs in modelDescription order, shortest round-trip numbers), one row per step end.
 //   fmu_run FILE.fmu K STOP_S
@@ -9,7 +9,7 @@
 #include <cstdio>
 #include <iostream>
 
-#include "fmi3_importer.hpp"
+#include "fmi_importer.hpp"
 
 int main(int argc, char** argv) {
   if (argc != 4) {
@@ -22,9 +22,12 @@ int main(int argc, char** argv) {
     std::cerr << "fmu_run: " << error << "\n";
     return 1;
   }
-  fmi3Instance inst = fmu.make_instance("fmu_run");
   std::vector<std::vector<double>> rows;
-  if (inst == nullptr || !ehpt::test::run_fmu(fmu, inst, std::atoll(argv[2]), std::strtod(argv[3], nullptr), rows, error)) {
+  void* inst = fmu.version == 3 ? fmu.make_instance("fmu_run") : fmu.make_instance2("fmu_run");
+  const std::int64_t k = std::atoll(argv[2]);
+  const double stop_s = std::strtod(argv[3], nullptr);
+  if (inst == nullptr || !(fmu.version == 3 ? ehpt::test::run_fmu(fmu, inst, k, stop_s, rows, error)
+                                            : ehpt::test::run_fmu2(fmu, inst, k, stop_s, rows, error))) {
     std::cerr << "fmu_run: " << (inst == nullptr ? "instantiation failed" : error) << "\n";
     for (const std::string& l : fmu.log) std::cerr << l << "\n";
     return 1;
@@ -42,6 +45,10 @@ int main(int argc, char** argv) {
     out += "\n";
   }
   std::fwrite(out.data(), 1, out.size(), stdout);
-  fmu.free_instance(inst);
+  if (fmu.version == 3) {
+    fmu.free_instance(inst);
+  } else {
+    fmu.free_instance2(inst);
+  }
   return 0;
 }

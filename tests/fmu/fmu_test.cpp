@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// `ehpt fmu` checked by the project's own FMI 3.0 importer (fmi3_importer.hpp): the FMU's
+// `ehpt fmu` checked by the project's own FMI 3.0 importer (fmi_importer.hpp): the FMU's
 // trajectory is `ehpt run`'s, bit for bit, at communication steps of 1, 10 and 100 plant steps;
 // instances in one process are independent; a wrong call is an fmi3Error with a message
 // through the logger, never a crash.
@@ -15,7 +15,7 @@
 #include <map>
 #include <sstream>
 
-#include "fmi3_importer.hpp"
+#include "fmi_importer.hpp"
 #include "hil/config/config.hpp"
 #include "hil/run/simulation.hpp"
 #include "io/process.hpp"
@@ -85,6 +85,13 @@ void expect_equal(const Fmi3Fmu& fmu, const std::vector<std::vector<double>>& ro
     }
   }
   EXPECT_EQ(mismatches, 0) << what;
+}
+
+bool logged(const Fmi3Fmu& fmu, const std::string& text) {
+  for (const std::string& l : fmu.log) {
+    if (l.find(text) != std::string::npos) return true;
+  }
+  return false;
 }
 
 class Fmu3 : public ::testing::Test {
@@ -173,13 +180,6 @@ TEST_F(Fmu3, InstancesInOneProcessAreIndependent) {
   b.free_instance(b1);
 }
 
-bool logged(const Fmi3Fmu& fmu, const std::string& text) {
-  for (const std::string& l : fmu.log) {
-    if (l.find(text) != std::string::npos) return true;
-  }
-  return false;
-}
-
 // Wrong calls: fmi3Error (or NULL) with the reason in the log, never a crash; the instance
 // then refuses everything but free.
 TEST_F(Fmu3, WrongCallsAreErrorsWithAMessage) {
@@ -247,6 +247,42 @@ TEST_F(Fmu3, WrongCallsAreErrorsWithAMessage) {
   fs::remove(fmu.dir + "/resources/vehicles/psecu2.toml");
   EXPECT_EQ(fmu.make_instance("missing"), nullptr);
   EXPECT_TRUE(logged(fmu, "psecu2.toml")) << (fmu.log.empty() ? "" : fmu.log.back());
+}
+
+// FMI 2.0: the same library core behind FMI 2.0's calls, the same trajectory bit for bit; its own
+// ways to be called wrong (another guid, a resource location that is not a file URI) refused.
+TEST_F(Fmu3, Fmi2GivesTheSameTrajectoryAndRefusesWhatFmi2CallsWrong) {
+  ASSERT_EQ(ehpt({"fmu", "psecu2_nedc", "--fmi", "2", "--set", "solver.duration_s=20", "--out", *dir_ + "/p2.fmu"}), 0);
+  Fmi3Fmu fmu;
+  std::string error;
+  ASSERT_TRUE(fmu.open(*dir_ + "/p2.fmu", error)) << error;
+  EXPECT_EQ(fmu.version, 2);
+  EXPECT_STREQ(fmu.get_version2(), "2.0");
+  EXPECT_EQ(fmu.output_names.size(), 34u);
+  for (const std::int64_t k : {1, 10, 100}) {
+    fmi2Component c = fmu.make_instance2("p2");
+    ASSERT_NE(c, nullptr) << (fmu.log.empty() ? "" : fmu.log.back());
+    std::vector<std::vector<double>> rows;
+    ASSERT_TRUE(run_fmu2(fmu, c, k, 20.0, rows, error)) << error;
+    expect_equal(fmu, rows, *ref_, k, "FMI 2.0, k = " + std::to_string(k));
+    fmu.free_instance2(c);
+  }
+  EXPECT_EQ(fmu.make_instance2("guid", "{0}"), nullptr);
+  EXPECT_TRUE(logged(fmu, "guid \"{0}\" is not this FMU's"));
+  static fmi2CallbackFunctions callbacks{};  // no logger: refused quietly, never a crash
+  EXPECT_EQ(fmu.instantiate2("uri", fmi2CoSimulation, fmu.token.c_str(), "/not/a/uri", &callbacks, fmi2False, fmi2False),
+            nullptr);
+  fmi2Component c = fmu.make_instance2("order");
+  ASSERT_NE(c, nullptr);
+  EXPECT_EQ(fmu.do_step2(c, 0.0, 0.001, fmi2True), fmi2Error);
+  EXPECT_TRUE(logged(fmu, "fmi2DoStep called in Instantiated (FMI's calling sequence)"));
+  fmu.free_instance2(c);
+  c = fmu.make_instance2("set");
+  const fmi2ValueReference out = 1;
+  const double v = 1.0;
+  EXPECT_EQ(fmu.set_real2(c, &out, 1, &v), fmi2Error);
+  EXPECT_TRUE(logged(fmu, "fmi2SetReal: speed_ref_m_s is an output"));
+  fmu.free_instance2(c);
 }
 
 // --ecu none: the importer is the ECU. A simple controller (motor torque from the driver's

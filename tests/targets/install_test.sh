@@ -35,7 +35,7 @@ for f in bin/ehpt libexec/ehpt/plot.py share/ehpt/scenarios/psecu2_nedc.toml sha
          include/ehpt/ehpt_lcm/psd_sensors_t.hpp "lib/$multiarch/libehpt_hil.a" "lib/$multiarch/cmake/ehpt/ehptConfig.cmake" \
          "lib/$multiarch/cmake/ehpt/ehptTargets.cmake" share/man/man1/ehpt.1.gz share/doc/ehpt/copyright \
          share/doc/ehpt/changelog.Debian.gz share/doc/ehpt/examples/pycan_ecu.py share/doc/ehpt/examples/embed/main.cpp \
-         lib/ehpt/fmu/libehpt_fmu3.so; do
+         lib/ehpt/fmu/libehpt_fmu3.so lib/ehpt/fmu/libehpt_fmu2.so; do
   [ -e "$prefix/$f" ] || fail "the install has no $f"
 done
 ! ls "$prefix"/lib/*.a >/dev/null 2>&1 || fail "static libraries outside lib/$multiarch: $(ls "$prefix"/lib/*.a)"

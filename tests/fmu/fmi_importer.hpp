@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
-// The project's FMI 3.0 co-simulation importer, written from the standard for the tests (no FMI
-// library exists in Debian): unpack an FMU (io/zip) into a folder of its own, read the
+// The project's FMI 3.0 and 2.0 co-simulation importer, written from the standards for the tests
+// (no FMI library exists in Debian): unpack an FMU (io/zip) into a folder of its own, read the
 // modelDescription.xml attributes an importer needs, dlopen binaries/x86_64-linux/<id>.so and
-// look up every function, then drive the calling sequence of FMI 3.0 §4.2: instantiate, enter
-// and exit initialization, doStep, get, terminate, free. Messages the FMU logs are kept.
+// look up the functions, then drive the calling sequence (FMI 3.0 §4.2; FMI 2.0 §4.2.4):
+// instantiate, (2.0: setup experiment), enter and exit initialization, doStep, get,
+// terminate, free. Messages the FMU logs are kept.
 
 #include <cstdint>
 #include <map>
@@ -12,6 +13,9 @@
 #include <string>
 #include <vector>
 
+#define EHPT_FMI2_NO_PROTOTYPES  // the importer looks the functions up (dlsym)
+#define EHPT_FMI3_NO_PROTOTYPES
+#include "io/fmi/fmi2_api.h"
 #include "io/fmi/fmi3_api.h"
 
 namespace ehpt::test {
@@ -24,7 +28,8 @@ class Fmi3Fmu {
   bool open(const std::string& fmu_path, std::string& error);
 
   std::string dir;                         // where it is unpacked
-  std::string token, model_identifier;
+  int version = 0;                         // 3 or 2 (fmiVersion)
+  std::string token, model_identifier;     // token: instantiationToken (3.0) or guid (2.0)
   double step_s = 0.0, stop_s = 0.0;       // fixedInternalStepSize, DefaultExperiment stopTime
   std::string xml;                         // modelDescription.xml
   std::map<std::string, fmi3ValueReference> vr;  // Float64 variables by name
@@ -47,6 +52,23 @@ class Fmi3Fmu {
   fmi3ResetTYPE* reset = nullptr;
   fmi3GetVersionTYPE* get_version = nullptr;
 
+  // FMI 2.0
+  fmi2InstantiateTYPE* instantiate2 = nullptr;
+  fmi2FreeInstanceTYPE* free_instance2 = nullptr;
+  fmi2SetupExperimentTYPE* setup_experiment2 = nullptr;
+  fmi2EnterInitializationModeTYPE* enter_initialization2 = nullptr;
+  fmi2ExitInitializationModeTYPE* exit_initialization2 = nullptr;
+  fmi2DoStepTYPE* do_step2 = nullptr;
+  fmi2GetRealTYPE* get_real2 = nullptr;
+  fmi2SetRealTYPE* set_real2 = nullptr;
+  fmi2GetBooleanTYPE* get_boolean2 = nullptr;
+  fmi2SetBooleanTYPE* set_boolean2 = nullptr;
+  fmi2TerminateTYPE* terminate2 = nullptr;
+  fmi2GetBooleanStatusTYPE* get_boolean_status2 = nullptr;
+  fmi2GetVersionTYPE* get_version2 = nullptr;
+  // instantiate (FMI 2.0) with this FMU's guid and resources as a file URI, logging into `log`
+  fmi2Component make_instance2(const char* name, const char* guid_override = nullptr);
+
   // instantiate with this FMU's token and resources, the log callback collecting into `log`
   fmi3Instance make_instance(const char* name, const char* token_override = nullptr);
 
@@ -59,5 +81,8 @@ class Fmi3Fmu {
 // (output_names order) after each step, preceded by the time. false and why on any non-OK.
 bool run_fmu(Fmi3Fmu& fmu, fmi3Instance instance, std::int64_t k, double stop_s, std::vector<std::vector<double>>& rows,
              std::string& error);
+// The same through FMI 2.0 (the time is the importer's own communication point).
+bool run_fmu2(Fmi3Fmu& fmu, fmi2Component instance, std::int64_t k, double stop_s, std::vector<std::vector<double>>& rows,
+              std::string& error);
 
 }  // namespace ehpt::test
