@@ -35,7 +35,7 @@ const char* kFmuHelp =
     "\n"
     "Builds an FMI 3.0 (or 2.0) co-simulation FMU of the scenario for x86_64-linux: its\n"
     "vehicle on the scenario's cycle, every output of 'ehpt signals SCENARIO' an FMU output\n"
-    "(Float64, SI units), doStep in whole plant steps (the plant step). The FMU holds the scenario,\n"
+    "(Float64, SI units), doStep in whole plant steps. The FMU holds the scenario,\n"
     "vehicle, maps and cycle under resources/ and runs where ehpt is not installed.\n"
     "docs/fmu.md: the variables, the calling sequence, and how to import it (FMPy, OMSimulator,\n"
     "Simulink, VEOS, SIL Kit).\n"
