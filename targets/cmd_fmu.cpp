@@ -91,7 +91,8 @@ std::string documentation_page(const fmu::Description& d, const std::string& id,
     h += "<tr><td>" + std::to_string(v.vr) + "</td><td>" + xml_escape(v.name) + "</td><td>" +
          (v.causality == fmu::Causality::kIndependent ? "independent"
           : v.causality == fmu::Causality::kInput    ? "input"
-                                                     : "output") +
+          : v.causality == fmu::Causality::kParameter ? "parameter"
+                                                      : "output") +
          "</td><td>" + xml_escape(v.unit) +
          "</td><td>" + xml_escape(v.description) + "</td></tr>\n";
   }
@@ -224,7 +225,13 @@ int cmd_fmu(const std::vector<std::string>& args) {
   if (mode == fmu::EcuMode::kNone) manifest += "ecu none\n";
   entries.push_back({std::string("resources/") + fmu::kManifestName, manifest});
 
-  const fmu::Description d = fmu::describe(sc, mode);
+  std::vector<std::pair<std::string, double>> numbers;  // the vehicle's: the FMU's parameters
+  std::vector<std::string> load_errors;
+  if (!hil::scenario_numbers(sc.path, sets, numbers, load_errors)) {
+    for (const std::string& e : load_errors) std::cerr << e << "\n";
+    return 2;
+  }
+  const fmu::Description d = fmu::describe(sc, mode, numbers);
   const std::string tool = "ehpt " + std::string(hil::build_info().version);
   entries.insert(entries.begin(), io::ZipEntry{"modelDescription.xml", fmi == "3"
                                                                             ? fmu::model_description_3(d, id, token, tool)
@@ -242,13 +249,15 @@ int cmd_fmu(const std::vector<std::string>& args) {
     std::cerr << "error: " << error << "\n";
     return 1;
   }
-  std::size_t outputs = 0, inputs = 0;
+  std::size_t outputs = 0, inputs = 0, parameters = 0;
   for (const fmu::Variable& v : d.variables) {
     outputs += v.causality == fmu::Causality::kOutput ? 1 : 0;
     inputs += v.causality == fmu::Causality::kInput ? 1 : 0;
+    parameters += v.causality == fmu::Causality::kParameter ? 1 : 0;
   }
   return out("fmu           " + out_path + ": FMI " + fmi + ".0 co-simulation, modelIdentifier " + id + ", " +
-             std::to_string(inputs) + " inputs, " + std::to_string(outputs) + " outputs, step " +
+             std::to_string(parameters) + " parameters, " + std::to_string(inputs) + " inputs, " +
+             std::to_string(outputs) + " outputs, step " +
              io::number_text(d.step_s) + " s, stop " +
              io::number_text(d.stop_s) + " s, " + std::to_string(entries.size()) + " files, " +
              std::to_string(archive.size()) + " bytes\n")

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <deque>
 #include <filesystem>
+#include <set>
 
 #include "hil/config/config_reader.hpp"
 #include "hil/config/scenario.hpp"
@@ -171,9 +172,11 @@ bool load_vehicle_chain(FileRef ref, std::deque<toml::table>& storage, std::vect
 
 // load_scenario's work; cycle: the cycle as arrays in place of the scenario's file (nullptr: the file)
 bool load(const std::string& path, const std::vector<std::string>& overrides, const std::vector<std::string>& fault_args,
-          const CycleArrays* cycle, Scenario& out, std::vector<std::string>& errors, LoadCache* cache = nullptr) {
+          const CycleArrays* cycle, Scenario& out, std::vector<std::string>& errors, LoadCache* cache = nullptr,
+          std::vector<std::pair<std::string, double>>* numbers = nullptr) {
   Context ctx;
   if (cache != nullptr) ctx.cache = &cache->files();
+  ctx.numbers = numbers;
   out = Scenario{};
   out.path = path;
   out.name = fs::path(path).stem().string();
@@ -444,6 +447,20 @@ bool load_scenario(const std::string& path, const std::vector<std::string>& over
 bool load_scenario_with_cycle(const std::string& path, const std::vector<std::string>& overrides,
                               const CycleArrays& cycle, Scenario& out, std::vector<std::string>& errors) {
   return load(path, overrides, {}, &cycle, out, errors);
+}
+
+bool scenario_numbers(const std::string& path, const std::vector<std::string>& overrides,
+                      std::vector<std::pair<std::string, double>>& numbers, std::vector<std::string>& errors) {
+  Scenario sc;
+  std::vector<std::pair<std::string, double>> read;
+  if (!load(path, overrides, {}, nullptr, sc, errors, nullptr, &read)) return false;
+  // each key once, as the load used it (the first read; a key read again reads the same value)
+  numbers.clear();
+  std::set<std::string> seen;
+  for (auto& [key, value] : read) {
+    if (seen.insert(key).second) numbers.emplace_back(std::move(key), value);
+  }
+  return true;
 }
 
 }  // namespace ehpt::hil

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hil/config/any_params.hpp"
@@ -132,6 +133,12 @@ struct CycleArrays {
   std::vector<double> time_s;
   std::vector<double> speed_m_s;
 };
+
+// Every number a load of the scenario reads, given or defaulted, keyed as --set writes it
+// ("vehicle.vehicle.mass_kg"), in the order read, each once: what an FMU offers as its
+// parameters (targets/fmu/). false and the load's problems if it does not load.
+bool scenario_numbers(const std::string& path, const std::vector<std::string>& overrides,
+                      std::vector<std::pair<std::string, double>>& numbers, std::vector<std::string>& errors);
 
 // load_scenario with the cycle given as arrays.
 bool load_scenario_with_cycle(const std::string& path, const std::vector<std::string>& overrides,

@@ -94,6 +94,8 @@ struct Context {
     return it == shown.end() ? field : it->second;
   }
   const CycleArrays* cycle_arrays = nullptr;  // load_scenario_with_cycle: load_cycle takes these, not a file
+  // scenario_numbers: every number read (given or defaulted), keyed as --set writes it; null: none
+  std::vector<std::pair<std::string, double>>* numbers = nullptr;
   // every file read, in the order read (each once): what the run depends on (hil/config/config.hpp)
   std::vector<InputFile> inputs;
   void read_file(const std::string& path, const std::string& content, const std::string* sha256 = nullptr);
@@ -185,11 +187,18 @@ class Reader {
   std::optional<double> opt_number(std::string_view key) {
     const toml::node* n = find(key);
     if (n == nullptr) return std::nullopt;
-    if (auto v = n->value<double>()) return *v;  // integers convert too
+    if (auto v = n->value<double>()) {  // integers convert too
+      if (ctx_.numbers != nullptr) ctx_.numbers->emplace_back(space_ + field(key), *v);
+      return *v;
+    }
     ctx_.error(location(n, file_), field(key), node_text(*n), "must be a number");
     return std::nullopt;
   }
-  double number(std::string_view key, double fallback) { return opt_number(key).value_or(fallback); }
+  double number(std::string_view key, double fallback) {
+    const std::optional<double> v = opt_number(key);
+    if (!v && ctx_.numbers != nullptr && !has(key)) ctx_.numbers->emplace_back(space_ + field(key), fallback);
+    return v.value_or(fallback);
+  }
   double required_number(std::string_view key) {
     if (!has(key)) {
       find(key);

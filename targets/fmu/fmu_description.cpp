@@ -16,30 +16,39 @@ namespace {
 struct UnitRow {
   const char* suffix;
   const char* unit;
-  // SI base-unit exponents kg, m, s, A (what the signals use), and a factor to SI
-  int kg, m, s, A;
+  // SI base-unit exponents kg, m, s, A, rad (what the names use), and a factor to SI
+  int kg, m, s, A, rad;
   double factor;
 };
 
-// Longest suffix first: _g_kWh before _kWh before _h ...
+// The most specific suffix first: _Nm_s_rad before _rad, _g_kWh before _g.
 constexpr UnitRow kUnits[] = {
-    {"_g_kWh", "g/(kW.h)", 0, -2, 2, 0, 1e-3 / 3.6e6},
-    {"_rad_s", "rad/s", 0, 0, -1, 0, 1.0},
-    {"_m_s2", "m/s2", 0, 1, -2, 0, 1.0},
-    {"_m_s", "m/s", 0, 1, -1, 0, 1.0},
-    {"_g_s", "g/s", 1, 0, -1, 0, 1e-3},
-    {"_kmh", "km/h", 0, 1, -1, 0, 1.0 / 3.6},
-    {"_Nm", "N.m", 1, 2, -2, 0, 1.0},
-    {"_rad", "rad", 0, 0, 0, 0, 1.0},
-    {"_Wh", "W.h", 1, 2, -2, 0, 3600.0},
-    {"_W", "W", 1, 2, -3, 0, 1.0},
-    {"_V", "V", 1, 2, -3, -1, 1.0},
-    {"_A", "A", 0, 0, 0, 1, 1.0},
-    {"_J", "J", 1, 2, -2, 0, 1.0},
-    {"_N", "N", 1, 1, -2, 0, 1.0},
-    {"_m", "m", 0, 1, 0, 0, 1.0},
-    {"_s", "s", 0, 0, 1, 0, 1.0},
-    {"_g", "g", 1, 0, 0, 0, 1e-3},
+    {"_Nm_s_rad", "N.m.s/rad", 1, 2, -1, 0, -1, 1.0},
+    {"_g_kWh", "g/(kW.h)", 0, -2, 2, 0, 0, 1e-3 / 3.6e6},
+    {"_kg_m3", "kg/m3", 1, -3, 0, 0, 0, 1.0},
+    {"_J_kg", "J/kg", 0, 2, -2, 0, 0, 1.0},
+    {"_Nm_W", "N.m/W", 0, 0, 1, 0, 0, 1.0},
+    {"_rad_s", "rad/s", 0, 0, -1, 0, 1, 1.0},
+    {"_m_s2", "m/s2", 0, 1, -2, 0, 0, 1.0},
+    {"_m_s", "m/s", 0, 1, -1, 0, 0, 1.0},
+    {"_g_s", "g/s", 1, 0, -1, 0, 0, 1e-3},
+    {"_kgm2", "kg.m2", 1, 2, 0, 0, 0, 1.0},
+    {"_kmh", "km/h", 0, 1, -1, 0, 0, 1.0 / 3.6},
+    {"_Ohm", "Ohm", 1, 2, -3, -2, 0, 1.0},
+    {"_Nm", "N.m", 1, 2, -2, 0, 0, 1.0},
+    {"_rad", "rad", 0, 0, 0, 0, 1, 1.0},
+    {"_Wh", "W.h", 1, 2, -2, 0, 0, 3600.0},
+    {"_Ah", "A.h", 0, 0, 1, 1, 0, 3600.0},
+    {"_m2", "m2", 0, 2, 0, 0, 0, 1.0},
+    {"_kg", "kg", 1, 0, 0, 0, 0, 1.0},
+    {"_W", "W", 1, 2, -3, 0, 0, 1.0},
+    {"_V", "V", 1, 2, -3, -1, 0, 1.0},
+    {"_A", "A", 0, 0, 0, 1, 0, 1.0},
+    {"_J", "J", 1, 2, -2, 0, 0, 1.0},
+    {"_N", "N", 1, 1, -2, 0, 0, 1.0},
+    {"_m", "m", 0, 1, 0, 0, 0, 1.0},
+    {"_s", "s", 0, 0, 1, 0, 0, 1.0},
+    {"_g", "g", 1, 0, 0, 0, 0, 1e-3},
 };
 
 const UnitRow* unit_row(std::string_view name) {
@@ -73,7 +82,7 @@ std::string unit_definitions(const Description& d) {
     if (u->m != 0) x += " m=\"" + std::to_string(u->m) + "\"";
     if (u->s != 0) x += " s=\"" + std::to_string(u->s) + "\"";
     if (u->A != 0) x += " A=\"" + std::to_string(u->A) + "\"";
-    if (name == "rad" || name == "rad/s") x += " rad=\"1\"";
+    if (u->rad != 0) x += " rad=\"" + std::to_string(u->rad) + "\"";
     if (u->factor != 1.0) x += " factor=\"" + number(u->factor) + "\"";
     x += "/></Unit>\n";
   }
@@ -143,7 +152,7 @@ std::string unit_of(std::string_view signal_name) {
   return u != nullptr ? u->unit : "";
 }
 
-Description describe(const hil::Scenario& sc, EcuMode ecu) {
+Description describe(const hil::Scenario& sc, EcuMode ecu, const std::vector<std::pair<std::string, double>>& numbers) {
   Description d;
   d.ecu = ecu;
   d.psd = sc.ecu.holds<ecu::PsdEcuParams>();
@@ -178,6 +187,18 @@ Description describe(const hil::Scenario& sc, EcuMode ecu) {
     } else {
       add_message_fields<msgs::EvSensors, msgs::EvCommand>(d, vr);
     }
+  }
+  for (const auto& [key, value] : numbers) {
+    if (key.rfind("vehicle.", 0) != 0) continue;  // the vehicle's; the solver and output are the FMU's own
+    Variable v;
+    v.vr = vr++;
+    v.name = key;
+    v.unit = unit_of(key);
+    v.description = "the vehicle's " + key.substr(8) + " (--set " + key + "), checked when initialization ends";
+    v.causality = Causality::kParameter;
+    v.source = Source::kParameter;
+    v.start = value;
+    d.variables.push_back(v);
   }
   return d;
 }
@@ -216,6 +237,9 @@ std::string model_description_3(const Description& d, const std::string& model_i
       case Causality::kInput:
         x += std::string(" causality=\"input\" variability=\"") + (boolean ? "discrete" : "continuous") + "\" start=\"" +
              (boolean ? (v.start != 0.0 ? "true" : "false") : number(v.start)) + "\"";
+        break;
+      case Causality::kParameter:
+        x += " causality=\"parameter\" variability=\"fixed\" start=\"" + number(v.start) + "\"";
         break;
     }
     if (!v.unit.empty() && !boolean) x += " unit=\"" + xml_escape(v.unit) + "\"";
@@ -258,7 +282,10 @@ std::string model_description_2(const Description& d, const std::string& model_i
     x += "    <ScalarVariable name=\"" + xml_escape(v.name) + "\" valueReference=\"" + std::to_string(v.vr) + "\"";
     if (!v.description.empty()) x += " description=\"" + xml_escape(v.description) + "\"";
     const char* variability = boolean || v.source == Source::kSensor ? "discrete" : "continuous";
-    if (v.causality == Causality::kInput) {
+    if (v.causality == Causality::kParameter) {
+      x += " causality=\"parameter\" variability=\"fixed\" initial=\"exact\"><Real start=\"" + number(v.start) + "\"" +
+           (v.unit.empty() ? "" : " unit=\"" + xml_escape(v.unit) + "\"") + "/>";
+    } else if (v.causality == Causality::kInput) {
       x += std::string(" causality=\"input\" variability=\"") + (boolean ? "discrete" : "continuous") + "\">";
       x += boolean ? std::string("<Boolean start=\"") + (v.start != 0.0 ? "true" : "false") + "\"/>"
                    : "<Real start=\"" + number(v.start) + "\"" + (v.unit.empty() ? "" : " unit=\"" + xml_escape(v.unit) + "\"") + "/>";

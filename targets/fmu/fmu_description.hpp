@@ -14,11 +14,14 @@
 
 namespace ehpt::fmu {
 
-enum class Causality { kIndependent, kOutput, kInput };
+enum class Causality { kIndependent, kOutput, kInput, kParameter };
 enum class Type { kFloat64, kBoolean };
 // Where a variable's value comes from: the time, a plant signal (every step), a field of the
 // sensor message the ECU reads at its samples, or (an input) a field of the command message.
-enum class Source { kTime, kSignal, kSensor, kCommand };
+// A parameter is a number of the scenario (a --set key: "vehicle.vehicle.mass_kg"), set before
+// initialization ends, when the scenario is loaded again with it (and checked as `ehpt run`
+// checks it).
+enum class Source { kTime, kSignal, kSensor, kCommand, kParameter };
 
 // Whose ECU drives the plant: the scenario's built-in one, or the importer (--ecu none: the
 // command message's fields are inputs, the sensor message's outputs).
@@ -34,7 +37,7 @@ struct Variable {
   Type type = Type::kFloat64;
   Source source = Source::kSignal;
   int index = -1;            // in signals(), or in the message's field table (msgs/fields.hpp)
-  double start = 0.0;        // an input's start value (the safe command: 0, engine off)
+  double start = 0.0;        // an input's start value (the safe command: 0, engine off), a parameter's
 };
 
 struct Description {
@@ -48,7 +51,10 @@ struct Description {
 };
 
 // ecu = kNone needs a vehicle with bus messages (hil::can_run_on_bus' rule); the caller checks.
-Description describe(const hil::Scenario& sc, EcuMode ecu = EcuMode::kBuiltin);
+// numbers: hil::scenario_numbers of the scenario; those of the vehicle ("vehicle.*") become
+// parameters.
+Description describe(const hil::Scenario& sc, EcuMode ecu = EcuMode::kBuiltin,
+                     const std::vector<std::pair<std::string, double>>& numbers = {});
 
 // The SI unit of a signal name's suffix (speed_m_s -> "m/s"); "" for a quantity without one
 // (soc, iceON, driverRequest).

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 
 #include "hil/run/batch.hpp"  // fault_text
@@ -27,12 +28,12 @@ const char* type_name(Type t) { return t == Type::kBoolean ? "Boolean" : "Float6
 }  // namespace
 
 Instance::Instance(hil::Scenario sc, std::string scenario_path, std::vector<std::string> sets, EcuMode ecu, Log log,
-                   Fmi fmi)
+                   Fmi fmi, const std::vector<std::pair<std::string, double>>& numbers)
     : sc_(std::move(sc)),
       scenario_path_(std::move(scenario_path)),
       sets_(std::move(sets)),
       log_(log),
-      description_(describe(sc_, ecu)),
+      description_(describe(sc_, ecu, numbers)),
       ecu_(ecu),
       fmi_(fmi) {
   values_.assign(description_.variables.size(), 0.0);
@@ -80,11 +81,12 @@ std::unique_ptr<Instance> Instance::make(const std::string& resource_dir, const 
   }
   hil::Scenario sc;
   std::vector<std::string> errors;
-  if (!hil::load_scenario(dir + scenario, sets, sc, errors)) {
+  std::vector<std::pair<std::string, double>> numbers;  // the parameters, as ehpt fmu described them
+  if (!hil::load_scenario(dir + scenario, sets, sc, errors) || !hil::scenario_numbers(dir + scenario, sets, numbers, errors)) {
     for (const std::string& e : errors) log(kError, "logStatusError", e);
     return nullptr;
   }
-  return std::unique_ptr<Instance>(new Instance(std::move(sc), dir + scenario, std::move(sets), ecu, log, fmi));
+  return std::unique_ptr<Instance>(new Instance(std::move(sc), dir + scenario, std::move(sets), ecu, log, fmi, numbers));
 }
 
 bool Instance::fail(const std::string& message) {
@@ -108,15 +110,8 @@ bool Instance::enter_initialization(bool stop_defined, double start_s, double st
   if (stop_defined) {
     if (!std::isfinite(stop_s) || stop_s <= 0.0) return fail("stopTime = " + io::number_text(stop_s) + ": must be > 0 s");
     if (stop_s != stop_s_) {  // the scenario again, with the importer's stop time
-      std::vector<std::string> errors;
-      hil::Scenario sc;
-      std::vector<std::string> sets = sets_;
-      sets.push_back("solver.duration_s=" + io::number_text(stop_s));
-      if (!hil::load_scenario(scenario_path_, sets, sc, errors)) {
-        for (const std::string& e : errors) log_(kError, "logStatusError", e);
-        return fail("stopTime = " + io::number_text(stop_s) + ": the scenario does not load with it");
-      }
-      sc_ = std::move(sc);
+      stop_set_ = "solver.duration_s=" + io::number_text(stop_s);
+      if (!reload(name(Call::kEnterInitialization))) return false;
       stop_s_ = static_cast<double>(sc_.solver.steps) * sc_.solver.step_s;
     }
   }
@@ -163,8 +158,37 @@ void Instance::apply_inputs() {
   }
 }
 
+bool Instance::reload(const char* call) {
+  std::vector<std::string> sets = sets_;
+  if (!stop_set_.empty()) sets.push_back(stop_set_);
+  std::string changed;
+  for (const Variable& v : description_.variables) {
+    const double now = values_[v.vr];
+    if (v.source != Source::kParameter || std::memcmp(&now, &v.start, sizeof now) == 0) continue;
+    sets.push_back(v.name + "=" + io::number_text(now));  // shortest round trip: the value exactly
+    changed += (changed.empty() ? "" : ", ") + v.name + " = " + io::number_text(now);
+  }
+  std::vector<std::string> errors;
+  hil::Scenario sc;
+  if (!hil::load_scenario(scenario_path_, sets, sc, errors)) {
+    for (const std::string& e : errors) log_(kError, "logStatusError", e);
+    return fail(std::string(call) + ": the scenario does not load with " +
+                (changed.empty() ? std::string("the importer's stop time") : "the parameters set (" + changed + ")") +
+                " (the problems above)");
+  }
+  sc_ = std::move(sc);
+  return true;
+}
+
 bool Instance::exit_initialization() {
   if (!in(State::kInitialization, name(Call::kExitInitialization))) return false;
+  // parameters the importer changed: the scenario loaded again with them, checked as ehpt run does
+  bool changed = false;
+  for (const Variable& v : description_.variables) {
+    const double now = values_[v.vr];
+    changed = changed || (v.source == Source::kParameter && std::memcmp(&now, &v.start, sizeof now) != 0);
+  }
+  if (changed && !reload(name(Call::kExitInitialization))) return false;
   hil::SimulationOptions opt;
   opt.columns = {0};  // the runner records time only: the FMU's outputs are read at each point
   opt.chunk_steps = kChunkSteps;
@@ -266,7 +290,11 @@ bool Instance::set_values(const char* call, Type type, const std::uint32_t* vrs,
       return fail(std::string(call) + ": value reference " + std::to_string(vrs[i]) + " is not one of this FMU's");
     }
     const Variable& v = description_.variables[vrs[i]];
-    if (v.causality != Causality::kInput) {
+    if (v.causality == Causality::kParameter && state_ == State::kStep) {
+      return fail(std::string(call) + ": " + v.name + " is a fixed parameter: set it before " +
+                  name(Call::kExitInitialization));
+    }
+    if (v.causality != Causality::kInput && v.causality != Causality::kParameter) {
       return fail(std::string(call) + ": " + v.name + " is an output" +
                   (ecu_ == EcuMode::kBuiltin ? " (this FMU has no inputs: its built-in ECU drives the plant; "
                                                "`ehpt fmu --ecu none` makes the command fields inputs)"
@@ -314,6 +342,7 @@ bool Instance::reset() {
     return fail(std::string(name(Call::kReset)) + ": the scenario no longer loads");
   }
   sc_ = std::move(sc);
+  stop_set_.clear();
   for (const Variable& v : description_.variables) values_[v.vr] = v.start;
   psd_sensors_ = {};
   ev_sensors_ = {};

@@ -56,8 +56,10 @@ class Instance {
   bool do_step(double current_s, double step_s, double& reached_s, bool& stopped);
   bool get_float64(const std::uint32_t* vrs, std::size_t n, double* values, std::size_t n_values);
   bool get_boolean(const std::uint32_t* vrs, std::size_t n, bool* values, std::size_t n_values);
-  // Inputs only (--ecu none: the command's fields), before or between steps; a value that is
-  // not finite is refused (as every other way in refuses one) and not applied.
+  // Inputs (--ecu none: the command's fields) before or between steps; parameters (the
+  // vehicle's numbers) before initialization ends, when the scenario is loaded again with them
+  // and checked as `ehpt run` checks it. A value that is not finite is refused (as every
+  // other way in refuses one) and not applied.
   bool set_float64(const std::uint32_t* vrs, std::size_t n, const double* values, std::size_t n_values);
   bool set_boolean(const std::uint32_t* vrs, std::size_t n, const bool* values, std::size_t n_values);
   bool terminate();
@@ -69,7 +71,10 @@ class Instance {
   enum class State { kInstantiated, kInitialization, kStep, kTerminated, kError };
   enum class Call { kEnterInitialization, kExitInitialization, kDoStep, kGetReal, kGetBoolean, kSetReal, kSetBoolean,
                     kTerminate, kReset };
-  Instance(hil::Scenario sc, std::string scenario_path, std::vector<std::string> sets, EcuMode ecu, Log log, Fmi fmi);
+  Instance(hil::Scenario sc, std::string scenario_path, std::vector<std::string> sets, EcuMode ecu, Log log, Fmi fmi,
+           const std::vector<std::pair<std::string, double>>& numbers);
+  // the scenario with the manifest's overrides, the importer's stop time and its parameters
+  bool reload(const char* call);
   const char* name(Call c) const;
   bool fail(const std::string& message);
   bool in(State s, const char* call);
@@ -86,6 +91,7 @@ class Instance {
   hil::Scenario sc_;
   std::string scenario_path_;  // reloaded when the importer asks for another stop time
   std::vector<std::string> sets_;  // the manifest's overrides
+  std::string stop_set_;           // "solver.duration_s=..." when the importer asked for another stop time
   Log log_;
   Description description_;
   State state_ = State::kInstantiated;

@@ -249,6 +249,50 @@ TEST_F(Fmu3, WrongCallsAreErrorsWithAMessage) {
   EXPECT_TRUE(logged(fmu, "psecu2.toml")) << (fmu.log.empty() ? "" : fmu.log.back());
 }
 
+// The vehicle's numbers are parameters: two instances of one FMU in one process, one with
+// vehicle.vehicle.mass_kg set to 1800 before initialization, give `ehpt run` without and with
+// --set vehicle.vehicle.mass_kg=1800, bit for bit. A value the loader refuses is refused at
+// fmi3ExitInitializationMode with ehpt run's message; a fixed parameter cannot change later.
+TEST_F(Fmu3, TheVehiclesNumbersAreParametersCheckedAsEhptRunChecksThem) {
+  Fmi3Fmu fmu;
+  std::string error;
+  ASSERT_TRUE(fmu.open(*dir_ + "/p.fmu", error)) << error;
+  const fmi3ValueReference mass = fmu.vr.at("vehicle.vehicle.mass_kg");
+  ASSERT_NE(fmu.xml.find("name=\"vehicle.vehicle.mass_kg\" valueReference=\"" + std::to_string(mass) + "\""),
+            std::string::npos);
+  fmi3Instance light = fmu.make_instance("light"), heavy = fmu.make_instance("heavy");
+  ASSERT_TRUE(light && heavy);
+  double start = 0.0;
+  ASSERT_EQ(fmu.get_float64(heavy, &mass, 1, &start, 1), fmi3OK);
+  EXPECT_GT(start, 500.0);  // the vehicle file's mass
+  EXPECT_NE(start, 1800.0);
+  const double m = 1800.0;
+  ASSERT_EQ(fmu.set_float64(heavy, &mass, 1, &m, 1), fmi3OK);
+  std::vector<std::vector<double>> rows_light, rows_heavy;
+  ASSERT_TRUE(run_fmu(fmu, light, 10, 20.0, rows_light, error)) << error;
+  ASSERT_TRUE(run_fmu(fmu, heavy, 10, 20.0, rows_heavy, error)) << error;
+  expect_equal(fmu, rows_light, *ref_, 10, "default mass");
+  expect_equal(fmu, rows_heavy, *refheavy_, 10, "mass 1800 kg as a parameter");
+  fmu.free_instance(light);
+  fmu.free_instance(heavy);
+
+  fmi3Instance bad = fmu.make_instance("bad");
+  const double negative = -5.0;
+  ASSERT_EQ(fmu.set_float64(bad, &mass, 1, &negative, 1), fmi3OK);  // checked when initialization ends
+  ASSERT_EQ(fmu.enter_initialization(bad, fmi3False, 0.0, 0.0, fmi3True, 20.0), fmi3OK);
+  EXPECT_EQ(fmu.exit_initialization(bad), fmi3Error);
+  EXPECT_TRUE(logged(fmu, "vehicle.vehicle.mass_kg = -5: must be a finite number > 0"));
+  EXPECT_TRUE(logged(fmu, "fmi3ExitInitializationMode: the scenario does not load with the parameters set "
+                          "(vehicle.vehicle.mass_kg = -5)"));
+  fmu.free_instance(bad);
+  fmi3Instance late = fmu.make_instance("late");
+  ASSERT_EQ(fmu.enter_initialization(late, fmi3False, 0.0, 0.0, fmi3True, 20.0), fmi3OK);
+  ASSERT_EQ(fmu.exit_initialization(late), fmi3OK);
+  EXPECT_EQ(fmu.set_float64(late, &mass, 1, &m, 1), fmi3Error);
+  EXPECT_TRUE(logged(fmu, "vehicle.vehicle.mass_kg is a fixed parameter: set it before fmi3ExitInitializationMode"));
+  fmu.free_instance(late);
+}
+
 // FMI 2.0: the same library core behind FMI 2.0's calls, the same trajectory bit for bit; its own
 // ways to be called wrong (another guid, a resource location that is not a file URI) refused.
 TEST_F(Fmu3, Fmi2GivesTheSameTrajectoryAndRefusesWhatFmi2CallsWrong) {
