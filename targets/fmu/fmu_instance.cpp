@@ -37,7 +37,11 @@ Instance::Instance(hil::Scenario sc, std::string scenario_path, std::vector<std:
       ecu_(ecu),
       fmi_(fmi) {
   values_.assign(description_.variables.size(), 0.0);
-  for (const Variable& v : description_.variables) values_[v.vr] = v.start;
+  for (const Variable& v : description_.variables) {
+    values_[v.vr] = v.start;
+    if (v.source == Source::kSignal) signal_vrs_.emplace_back(v.vr, static_cast<std::size_t>(v.index));
+    if (v.source == Source::kSensor) sensor_vrs_.emplace_back(v.vr, static_cast<std::size_t>(v.index));
+  }
 }
 
 const char* Instance::name(Call c) const {
@@ -128,14 +132,10 @@ void Instance::refresh_outputs() {
       sim_->read_sensors(ev_sensors_);
     }
   }
-  for (const Variable& v : description_.variables) {
-    if (v.source == Source::kSignal) {
-      values_[v.vr] = y[static_cast<std::size_t>(v.index)];
-    } else if (v.source == Source::kSensor) {
-      const auto i = static_cast<std::size_t>(v.index);
-      values_[v.vr] = description_.psd ? msgs::kPsdSensorFieldTable[i].get(psd_sensors_)
-                                       : msgs::kEvSensorFieldTable[i].get(ev_sensors_);
-    }
+  for (const auto& [vr, i] : signal_vrs_) values_[vr] = y[i];
+  for (const auto& [vr, i] : sensor_vrs_) {
+    values_[vr] = description_.psd ? msgs::kPsdSensorFieldTable[i].get(psd_sensors_)
+                                   : msgs::kEvSensorFieldTable[i].get(ev_sensors_);
   }
 }
 
