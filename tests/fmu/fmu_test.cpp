@@ -17,6 +17,7 @@
 
 #include "fmi_importer.hpp"
 #include "hil/config/config.hpp"
+#include "hil/diag/alloc_guard.hpp"
 #include "hil/run/simulation.hpp"
 #include "io/process.hpp"
 #include "msgs/psd.hpp"
@@ -247,6 +248,44 @@ TEST_F(Fmu3, WrongCallsAreErrorsWithAMessage) {
   fs::remove(fmu.dir + "/resources/vehicles/psecu2.toml");
   EXPECT_EQ(fmu.make_instance("missing"), nullptr);
   EXPECT_TRUE(logged(fmu, "psecu2.toml")) << (fmu.log.empty() ? "" : fmu.log.back());
+}
+
+// doStep allocates nothing: counted at the malloc level for the whole process (the FMU
+// library's malloc and operator new are this executable's, hil/diag/alloc_guard.hpp), from
+// the first doStep to the last, with every output read and, without the ECU, the inputs set
+// at each point. Instantiation and initialization may allocate.
+TEST_F(Fmu3, DoStepAllocatesNothing) {
+  ASSERT_EQ(ehpt({"fmu", "psecu2_nedc", "--ecu", "none", "--set", "solver.duration_s=20", "--out", *dir_ + "/na.fmu"}), 0);
+  for (const char* file : {"/p.fmu", "/na.fmu"}) {
+    Fmi3Fmu fmu;
+    std::string error;
+    ASSERT_TRUE(fmu.open(*dir_ + file, error)) << error;
+    fmi3Instance inst = fmu.make_instance("alloc");
+    ASSERT_NE(inst, nullptr);
+    ASSERT_EQ(fmu.enter_initialization(inst, fmi3False, 0.0, 0.0, fmi3True, 20.0), fmi3OK);
+    ASSERT_EQ(fmu.exit_initialization(inst), fmi3OK);
+    std::vector<fmi3ValueReference> refs;
+    for (const std::string& n : fmu.output_names) refs.push_back(fmu.vr.at(n));
+    std::vector<double> y(refs.size());
+    const bool inputs = fmu.vr.count("command.motTauRef_Nm") > 0;
+    const fmi3ValueReference mot = inputs ? fmu.vr.at("command.motTauRef_Nm") : 0;
+    int failed = 0;
+    hil::alloc_guard::reset();
+    hil::alloc_guard::arm();
+    for (std::int64_t n = 0; n < 20000; ++n) {
+      fmi3Boolean e, term, early;
+      fmi3Float64 last;
+      const double torque = 10.0;
+      if (inputs && fmu.set_float64(inst, &mot, 1, &torque, 1) != fmi3OK) ++failed;
+      if (fmu.do_step(inst, static_cast<double>(n) * 0.001, 0.001, fmi3True, &e, &term, &early, &last) != fmi3OK) ++failed;
+      if (fmu.get_float64(inst, refs.data(), refs.size(), y.data(), y.size()) != fmi3OK) ++failed;
+    }
+    hil::alloc_guard::disarm();
+    EXPECT_EQ(failed, 0) << file;
+    ASSERT_TRUE(hil::alloc_guard::active()) << "the hooks are not in this executable";
+    EXPECT_EQ(hil::alloc_guard::count(), 0u) << file << ": " << hil::alloc_guard::describe_first();
+    fmu.free_instance(inst);
+  }
 }
 
 // The vehicle's numbers are parameters: two instances of one FMU in one process, one with
