@@ -77,7 +77,7 @@ std::string path_of(const std::string& uri) {
   }
   std::string path;
   for (std::size_t i = 0; i < rest.size(); ++i) {
-    if (rest[i] == '%' && i + 2 < rest.size() + 0 && hex(rest[i + 1]) >= 0 && hex(rest[i + 2]) >= 0) {
+    if (rest[i] == '%' && i + 2 < rest.size() && hex(rest[i + 1]) >= 0 && hex(rest[i + 2]) >= 0) {
       path += static_cast<char>(hex(rest[i + 1]) * 16 + hex(rest[i + 2]));
       i += 2;
     } else {

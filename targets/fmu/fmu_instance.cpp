@@ -14,7 +14,7 @@ namespace ehpt::fmu {
 
 namespace {
 
-constexpr int kWarning = 1, kDiscard = 2, kError = 3;
+constexpr int kDiscard = 2, kError = 3;
 // the steps one run() of the runner may take (its row buffer); a longer doStep loops
 constexpr std::int64_t kChunkSteps = 100000;
 
@@ -328,6 +328,7 @@ bool Instance::set_boolean(const std::uint32_t* vrs, std::size_t n, const bool* 
 }
 
 bool Instance::terminate() {
+  if (state_ == State::kTerminated) return true;  // after a plant fault ended it (Discard): the importer's terminate
   if (state_ != State::kStep && state_ != State::kInitialization) return in(State::kStep, name(Call::kTerminate));
   state_ = State::kTerminated;
   return true;
@@ -349,7 +350,6 @@ bool Instance::reset() {
   psd_command_ = {};
   ev_command_ = {};
   state_ = State::kInstantiated;
-  (void)kWarning;
   return true;
 }
 

@@ -250,6 +250,40 @@ TEST_F(Fmu3, WrongCallsAreErrorsWithAMessage) {
   EXPECT_TRUE(logged(fmu, "psecu2.toml")) << (fmu.log.empty() ? "" : fmu.log.back());
 }
 
+// A plant fault that stops `ehpt run` (exit 3: here the SOC leaves its window at 14.574 s)
+// ends the FMU's run where it ends the CLI's: fmi3Discard with terminateSimulation and
+// lastSuccessfulTime there, the fault in the log, and fmi3Terminate still answers OK.
+TEST_F(Fmu3, APlantFaultEndsTheRunWhereEhptRunEndsIt) {
+  const std::vector<std::string> sets{"--set", "solver.duration_s=200", "--set", "vehicle.battery.soc_initial=0.1001",
+                                      "--set", "vehicle.battery.soc_min=0.1"};
+  std::vector<std::string> args{"fmu", "ev_nedc", "--out", *dir_ + "/fault.fmu"};
+  args.insert(args.end(), sets.begin(), sets.end());
+  ASSERT_EQ(ehpt(args), 0);
+  std::vector<std::string> run{"run", "ev_nedc", "--quiet", "--out", *dir_ + "/fault_run"};
+  run.insert(run.end(), sets.begin(), sets.end());
+  EXPECT_EQ(ehpt(run), 3);  // the CLI's plant fault
+  Fmi3Fmu fmu;
+  std::string error;
+  ASSERT_TRUE(fmu.open(*dir_ + "/fault.fmu", error)) << error;
+  fmi3Instance inst = fmu.make_instance("fault");
+  ASSERT_EQ(fmu.enter_initialization(inst, fmi3False, 0.0, 0.0, fmi3False, 0.0), fmi3OK);
+  ASSERT_EQ(fmu.exit_initialization(inst), fmi3OK);
+  fmi3Status status = fmi3OK;
+  fmi3Boolean e = fmi3False, term = fmi3False, early = fmi3False;
+  fmi3Float64 last = 0.0;
+  std::int64_t n = 0;
+  for (; n < 20000 && status == fmi3OK; ++n) {
+    status = fmu.do_step(inst, static_cast<double>(n) * 0.01, 0.01, fmi3True, &e, &term, &early, &last);
+  }
+  EXPECT_EQ(status, fmi3Discard);
+  EXPECT_TRUE(term);
+  EXPECT_EQ(last, 14.574);  // the step ehpt run stopped at (step 14574)
+  EXPECT_EQ(n, 1458);       // the call over 14.57 .. 14.58 s
+  EXPECT_TRUE(logged(fmu, "2 logStatusDiscard: fault: ev_nedc: the plant stopped on a fault at t = 14.574 s: "));
+  EXPECT_EQ(fmu.terminate(inst), fmi3OK);
+  fmu.free_instance(inst);
+}
+
 // doStep allocates nothing: counted at the malloc level for the whole process (the FMU
 // library's malloc and operator new are this executable's, hil/diag/alloc_guard.hpp), from
 // the first doStep to the last, with every output read and, without the ECU, the inputs set
