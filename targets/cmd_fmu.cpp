@@ -31,7 +31,7 @@ namespace {
 
 const char* kFmuHelp =
     "usage: ehpt fmu SCENARIO [--fmi 3|2] [--ecu builtin|none] [--out FILE.fmu]\n"
-    "                [--set key=value ...]\n"
+    "                [--set key=value ...] [--variables]\n"
     "\n"
     "Builds an FMI 3.0 (or 2.0) co-simulation FMU of the scenario for x86_64-linux: its\n"
     "vehicle on the scenario's cycle, every output of 'ehpt signals SCENARIO' an FMU output\n"
@@ -48,7 +48,9 @@ const char* kFmuHelp =
     "                   and older importers); the same variables and trajectory\n"
     "  --out FILE.fmu   where to write it (default out/<scenario name>.fmu); never over an\n"
     "                   existing file\n"
-    "  --set key=value  as for 'ehpt run': the FMU's scenario is the one with these overrides\n";
+    "  --set key=value  as for 'ehpt run': the FMU's scenario is the one with these overrides\n"
+    "  --variables      print the FMU's variables (a Markdown table: value reference, name,\n"
+    "                   causality, unit, start, description) and write nothing\n";
 
 // A C identifier from the scenario's name: modelIdentifier, the library's file name.
 std::string identifier_of(const std::string& name) {
@@ -99,11 +101,33 @@ std::string documentation_page(const fmu::Description& d, const std::string& id,
   return h + "</table>\n</body></html>\n";
 }
 
+// The variables as a Markdown table (docs/fmu-variables.md is made of these).
+std::string variables_table(const fmu::Description& d, const std::string& fmi) {
+  std::string t = "| vr | name | causality | unit | start | description |\n|---|---|---|---|---|---|\n";
+  for (const fmu::Variable& v : d.variables) {
+    if (fmi == "2" && v.causality == fmu::Causality::kIndependent) continue;  // FMI 2.0 has no time variable
+    const char* causality = v.causality == fmu::Causality::kIndependent ? "independent"
+                            : v.causality == fmu::Causality::kInput     ? "input"
+                            : v.causality == fmu::Causality::kParameter ? "parameter"
+                                                                        : "output";
+    std::string start;
+    if (v.causality == fmu::Causality::kInput || v.causality == fmu::Causality::kParameter) {
+      start = v.type == fmu::Type::kBoolean ? (v.start != 0.0 ? "true" : "false") : io::number_text(v.start);
+    }
+    std::string description = v.description;
+    for (char& c : description) c = c == '|' ? '/' : c;
+    t += "| " + std::to_string(v.vr) + " | `" + v.name + "` | " + causality + (v.type == fmu::Type::kBoolean ? " (Boolean)" : "") +
+         " | " + v.unit + " | " + start + " | " + description + " |\n";
+  }
+  return t;
+}
+
 }  // namespace
 
 int cmd_fmu(const std::vector<std::string>& args) {
   if (wants_help(args)) return out(kFmuHelp) ? 0 : 1;
   std::string scenario, out_path, fmi = "3", ecu = "builtin";
+  bool list_variables = false;
   std::vector<std::string> sets;
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
@@ -119,6 +143,8 @@ int cmd_fmu(const std::vector<std::string>& args) {
       fmi = args[++i];
     } else if (a == "--ecu") {
       ecu = args[++i];
+    } else if (a == "--variables") {
+      list_variables = true;
     } else if (!a.empty() && a[0] == '-') {
       std::cerr << "unknown option " << a << "\n" << kFmuHelp;
       return 1;
@@ -155,6 +181,15 @@ int cmd_fmu(const std::vector<std::string>& args) {
       std::cerr << "--set: a line break in '" << s << "' cannot go into the FMU's manifest\n";
       return 2;
     }
+  }
+  if (list_variables) {
+    std::vector<std::pair<std::string, double>> numbers;
+    std::vector<std::string> load_errors;
+    if (!hil::scenario_numbers(sc.path, sets, numbers, load_errors)) {
+      for (const std::string& e : load_errors) std::cerr << e << "\n";
+      return 2;
+    }
+    return out(variables_table(fmu::describe(sc, mode, numbers), fmi)) ? 0 : 1;
   }
   if (out_path.empty()) out_path = "out/" + sc.name + ".fmu";
   std::error_code ec;
