@@ -54,7 +54,12 @@ class EventStepper {
   static constexpr int kMaxLocateIterations = 100;
 
   EventStepper(const Plant& plant, Integrator& integrator, double t0_s, double h_s)
-      : plant_(plant), integ_(integrator), t0_s_(t0_s), h_s_(h_s), tol_s_(1e-7 * h_s) {}
+      : plant_(&plant), integ_(&integrator), t0_s_(t0_s), h_s_(h_s), tol_s_(1e-7 * h_s) {}
+  // After a copy (a saved simulation state restored): the plant and integrator of the copy's owner.
+  void rebind(const Plant& plant, Integrator& integrator) {
+    plant_ = &plant;
+    integ_ = &integrator;
+  }
 
   double time_s(std::int64_t n) const { return t0_s_ + static_cast<double>(n) * h_s_; }
   double step_s() const { return h_s_; }
@@ -81,9 +86,9 @@ class EventStepper {
         if (z_a != nullptr) {
           for (int i = 0; i < kNumZ; ++i) za_[i] = z_a[i];
         } else {
-          plant_.crossings(ta, xa_, m, u, za_.data());
+          plant_->crossings(ta, xa_, m, u, za_.data());
         }
-        plant_.crossings(t_end, x, m, u, zb_.data());
+        plant_->crossings(t_end, x, m, u, zb_.data());
         int fired = -1;
         double tau_s = t_end - ta;
         for (int i = 0; i < kNumZ; ++i) {
@@ -109,7 +114,7 @@ class EventStepper {
         x = xa_;
         if (tau_s > 0.0) integrate(ta, tau_s, m, u, x, r, dx_a);
         ta += tau_s;
-        plant_.on_crossing(fired, ta, x, m, u);
+        plant_->on_crossing(fired, ta, x, m, u);
         dx_a = nullptr;
         z_a = nullptr;
         ++r.events;
@@ -122,7 +127,7 @@ class EventStepper {
  private:
   void integrate(double t_s, double h_s, const Modes& m, const Inputs& u, State& x, StepReport& r,
                  const State* dx_start) {
-    const IntegratorStatus s = integ_.step(t_s, h_s, m, u, x, dx_start);
+    const IntegratorStatus s = integ_->step(t_s, h_s, m, u, x, dx_start);
     r.converged = r.converged && s.converged;
     r.iterations += s.iterations;
   }
@@ -138,7 +143,7 @@ class EventStepper {
       if (!(mid > lo && mid < hi)) mid = 0.5 * (lo + hi);
       xm_ = xa_;
       integrate(ta, mid, m, u, xm_, r, dx_a);
-      plant_.crossings(ta + mid, xm_, m, u, zm_.data());
+      plant_->crossings(ta + mid, xm_, m, u, zm_.data());
       const double z = zm_[i];
       if (z <= 0.0) {
         hi = mid;
@@ -155,8 +160,8 @@ class EventStepper {
     return hi;
   }
 
-  const Plant& plant_;
-  Integrator& integ_;
+  const Plant* plant_;
+  Integrator* integ_;
   double t0_s_, h_s_, tol_s_;
   State xa_, xm_;  // segment start; trial point while locating
   std::array<double, (kNumZ > 0 ? kNumZ : 1)> za_{}, zb_{}, zm_{};

@@ -35,7 +35,9 @@ class Rk4 {
   using Inputs = typename Plant::Inputs;
   static constexpr int N = Plant::kNumStates;
 
-  explicit Rk4(const Plant& plant) : plant_(plant) {}
+  explicit Rk4(const Plant& plant) : plant_(&plant) {}
+  // After a copy (a saved simulation state restored): the plant of the copy's owner.
+  void rebind(const Plant& plant) { plant_ = &plant; }
 
   // Run phase: x(t_s) -> x(t_s + h_s). dx_start: dx/dt at (t_s, x, m, u) if the caller has it
   // (the first stage; the result is the same bit for bit), else null.
@@ -49,14 +51,14 @@ class Rk4 {
     if (dx_start != nullptr) {
       each([&](auto i) __attribute__((always_inline)) { k1[i] = (*dx_start)[i]; });
     } else {
-      plant_.derivatives(t_s, x, m, u, k1);
+      plant_->derivatives(t_s, x, m, u, k1);
     }
     each([&](auto i) __attribute__((always_inline)) { tmp[i] = x[i] + half_s * k1[i]; });
-    plant_.derivatives(t_s + half_s, tmp, m, u, k2);
+    plant_->derivatives(t_s + half_s, tmp, m, u, k2);
     each([&](auto i) __attribute__((always_inline)) { tmp[i] = x[i] + half_s * k2[i]; });
-    plant_.derivatives(t_s + half_s, tmp, m, u, k3);
+    plant_->derivatives(t_s + half_s, tmp, m, u, k3);
     each([&](auto i) __attribute__((always_inline)) { tmp[i] = x[i] + h_s * k3[i]; });
-    plant_.derivatives(t_s + h_s, tmp, m, u, k4);
+    plant_->derivatives(t_s + h_s, tmp, m, u, k4);
     each([&](auto i) __attribute__((always_inline)) { x[i] += sixth_s * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]); });
     return {};
   }
@@ -68,7 +70,7 @@ class Rk4 {
         std::make_integer_sequence<int, N>{});
   }
 
-  const Plant& plant_;
+  const Plant* plant_;
 };
 
 namespace detail {
@@ -182,7 +184,7 @@ class ImplicitEuler {
   static constexpr int kIterationsRefresh = 4;   // converged, but in more: the same
 
   explicit ImplicitEuler(const Plant& plant, int max_iterations = 20, double tolerance = 1e-10)
-      : plant_(plant), max_iterations_(max_iterations), tolerance_(tolerance) {
+      : plant_(&plant), max_iterations_(max_iterations), tolerance_(tolerance) {
     if constexpr (requires { Plant::kAuditOnlyStates.size(); }) {
       for (const int i : Plant::kAuditOnlyStates) audit_only_[i] = true;
     }
@@ -190,6 +192,9 @@ class ImplicitEuler {
       if (!audit_only_[j]) active_[num_active_++] = j;
     }
   }
+
+  // After a copy (a saved simulation state restored): the plant of the copy's owner.
+  void rebind(const Plant& plant) { plant_ = &plant; }
 
   // Run phase: x(t_s) -> x(t_s + h_s). dx_start: dx/dt at (t_s, x, m, u) if the caller has it
   // (the predictor and the base of the differences), else null: one evaluation more.
@@ -199,7 +204,7 @@ class ImplicitEuler {
     if (dx_start != nullptr) {
       f0_ = *dx_start;
     } else {
-      plant_.derivatives(t_s, x0_, m, u, f0_);
+      plant_->derivatives(t_s, x0_, m, u, f0_);
     }
     IntegratorStatus status{false, 0};
     const bool modes_kept = kept_.valid && detail::same_modes(m, kept_modes_);
@@ -251,7 +256,7 @@ class ImplicitEuler {
       xp_ = x0_;
       const double delta = 1.5e-8 * std::max(1.0, std::abs(x0_[j]));
       xp_[j] += delta;
-      plant_.derivatives(t_s, xp_, m, u, fp_);
+      plant_->derivatives(t_s, xp_, m, u, fp_);
       jac_.col(j) = -h_s * (fp_ - f0_) / delta;
     }
     jac_ += Matrix::Identity();
@@ -278,7 +283,7 @@ class ImplicitEuler {
     const int cap = fresh ? max_iterations_ : std::min(kStaleIterations, max_iterations_);
     double s_prev = 0.0, theta = slot.theta;
     for (int it = 1; it <= cap; ++it) {
-      plant_.derivatives(t1_s, x, m, u, f_);
+      plant_->derivatives(t1_s, x, m, u, f_);
       // dx = M^-1 g in plain loops over the fixed size, on local arrays (no aliasing). An
       // audit-only state's column of M is the unit column, and so is its column of M^-1.
       std::array<double, N> g, dx;
@@ -315,7 +320,7 @@ class ImplicitEuler {
     return fresh ? Outcome::kFailed : Outcome::kSlow;
   }
 
-  const Plant& plant_;
+  const Plant* plant_;
   int max_iterations_;
   double tolerance_;
   State x0_, xp_, f0_, f_, fp_;

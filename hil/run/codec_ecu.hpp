@@ -69,6 +69,29 @@ template <class Controller>
 class CodecEcu {
  public:
   CodecEcu(std::unique_ptr<Controller> inner, bool through_can) : inner_(std::move(inner)), through_can_(through_can) {}
+  // A copy owns a copy of the ECU (a saved simulation state: Simulation::save_state); assigning
+  // one copies into the ECU already owned.
+  CodecEcu(const CodecEcu& o)
+      : inner_(o.inner_ ? std::make_unique<Controller>(*o.inner_) : nullptr),
+        through_can_(o.through_can_),
+        tx_(o.tx_),
+        saturated_(o.saturated_) {}
+  CodecEcu& operator=(const CodecEcu& o) {
+    if (this == &o) return *this;
+    if (!o.inner_) {
+      inner_.reset();
+    } else if (inner_) {
+      *inner_ = *o.inner_;
+    } else {
+      inner_ = std::make_unique<Controller>(*o.inner_);
+    }
+    through_can_ = o.through_can_;
+    tx_ = o.tx_;
+    saturated_ = o.saturated_;
+    return *this;
+  }
+  CodecEcu(CodecEcu&&) = default;
+  CodecEcu& operator=(CodecEcu&&) = default;
 
   // Run phase (no allocation).
   template <class Sensors, class Command>

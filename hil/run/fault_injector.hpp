@@ -117,6 +117,9 @@ class FaultInjector {
 
   // Start-up. ecu_ratio: plant steps per ECU sample (a sensor delay counts samples). plant: the
   // run's own, which plant faults change (between steps: apply_health); it outlives this.
+  // After a copy (a saved simulation state restored): the plant of the copy's owner.
+  void rebind(Plant& plant) { plant_ = &plant; }
+
   FaultInjector(std::span<const FaultSpec> specs, Plant& plant, double step_s, std::int64_t ecu_ratio)
       : h_s_(step_s), plant_(&plant) {
     faults_.resize(specs.size());

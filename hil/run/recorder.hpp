@@ -26,6 +26,9 @@ class Recorder {
     rows_.resize(static_cast<std::size_t>((chunk_steps / decimation_ + 4) * static_cast<std::int64_t>(width_)));
   }
 
+  // After a copy (a saved simulation state restored): the fault bits of the copy's owner.
+  void rebind_bits(const unsigned* bits) { bits_ = bits; }
+
   // Run phase: whether grid point n is one that is written without being forced.
   bool due(std::int64_t n) const { return n % decimation_ == 0; }
 

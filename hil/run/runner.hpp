@@ -98,7 +98,7 @@ class Runner {
   // message seams and its expectations on the outputs (none: a plain run; both outlive the runner)
   Runner(const Plant& plant, const RunnerOptions& opt, Controller* controller = nullptr, StepPacer* pacer = nullptr,
          FaultInjector<Plant>* faults = nullptr, ExpectationChecker<Plant>* checks = nullptr)
-      : plant_(plant),
+      : plant_(&plant),
         faults_(faults != nullptr && !faults->empty() ? faults : nullptr),
         checks_(checks != nullptr && !checks->empty() ? checks : nullptr),
         external_ecu_(opt.external_ecu),
@@ -160,6 +160,29 @@ class Runner {
     if (pacer_ != nullptr) pacer_->wait_for_step(n_);
   }
 
+  // Start-up only (a saved state restored: an FMU's fmi3SetFMUState): this runner takes saved's
+  // state, a copy of this runner (or of one built alike) made earlier, and keeps its own links:
+  // plant, controller, pacer, port, faults, checks, and what refers into it (the stepper to
+  // its integrator, the recorder to its fault bits). May allocate (the copy's buffers).
+  void restore_state(const Runner& saved) {
+    const Plant* plant = plant_;
+    Controller* controller = controller_;
+    StepPacer* pacer = pacer_;
+    Port* port = port_;
+    FaultInjector<Plant>* faults = faults_;
+    ExpectationChecker<Plant>* checks = checks_;
+    *this = saved;
+    plant_ = plant;
+    controller_ = controller;
+    pacer_ = pacer;
+    port_ = port;
+    faults_ = faults;
+    checks_ = checks;
+    integrator_.rebind(*plant_);
+    stepper_.rebind(*plant_, integrator_);
+    recorder_.rebind_bits(faults_ != nullptr ? &fault_mask_ : nullptr);
+  }
+
   // For an ECU outside the runner (external_ecu: a bus, a Python callback, a test): run()
   // stops at each ECU sample step; the caller reads the sensor message there (stamped like the
   // built-in ECU's) and writes the command, which acts from that step on; the next run()
@@ -168,7 +191,7 @@ class Runner {
     requires std::is_same_v<S, typename SensorsOf<Plant>::type>
   void sense(S& sensors) {
     sensors.stamp = msgs::Stamp{stepper_.time_s(n_), n_, sensor_sequence_++};
-    plant_.sense(sensors.stamp.time_s, x_, m_, u(), sensors);
+    plant_->sense(sensors.stamp.time_s, x_, m_, u(), sensors);
     if (faults_ != nullptr) faults_->sensors(n_, sensors.stamp.time_s, sensors);
     sensors_ = sensors;  // a sample step is sampled once: a port's exchange there gets this one
     sensed_step_ = n_;
@@ -300,7 +323,7 @@ class Runner {
       next_sample_step_ = n + controller_ratio_;
       const msgs::Stamp stamp{stepper_.time_s(n), n, sensor_sequence_++};
       sensors_.stamp = stamp;
-      plant_.sense(stamp.time_s, x_, m_, u(), sensors_);
+      plant_->sense(stamp.time_s, x_, m_, u(), sensors_);
       if (faults_ != nullptr) faults_->sensors(n, stamp.time_s, sensors_);
       Inputs command = inputs_;  // what the ECU does not set stays as it was
       controller_->update(sensors_, command);
@@ -329,7 +352,7 @@ class Runner {
       const bool full = full_outputs_ || row_due || n == total_steps_ || n == run_end_ ||
                         (external_ecu_ && (n + 1) % controller_ratio_ == 0);
       if (!full) {
-        plant_.observe(t_s, x_, m_, u(), y_, dx_observed_, z_observed_values_.data());
+        plant_->observe(t_s, x_, m_, u(), y_, dx_observed_, z_observed_values_.data());
         dx_observed_step_ = n;
         z_observed_ = true;
         y_full_ = false;
@@ -393,10 +416,10 @@ class Runner {
   void outputs_at(std::int64_t n) {
     const double t_s = stepper_.time_s(n);
     if constexpr (solvers::PlantWithOutputDerivatives<Plant>) {
-      plant_.outputs(t_s, x_, m_, u(), y_, dx_observed_);
+      plant_->outputs(t_s, x_, m_, u(), y_, dx_observed_);
       dx_observed_step_ = n;
     } else {
-      plant_.outputs(t_s, x_, m_, u(), y_);
+      plant_->outputs(t_s, x_, m_, u(), y_);
     }
     z_observed_ = false;
     y_full_ = true;
@@ -410,7 +433,7 @@ class Runner {
   [[gnu::noinline]] void rare_observe_all(std::int64_t n) {
     if constexpr (requires(const Plant& p, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx,
                            double* z) { p.template observe<plant::OutputSet::kAll>(0.0, x, m, u, y, dx, z); }) {
-      plant_.template observe<plant::OutputSet::kAll>(stepper_.time_s(n), x_, m_, u(), y_, dx_observed_,
+      plant_->template observe<plant::OutputSet::kAll>(stepper_.time_s(n), x_, m_, u(), y_, dx_observed_,
                                                       z_observed_values_.data());
       dx_observed_step_ = n;
       z_observed_ = true;
@@ -425,7 +448,7 @@ class Runner {
     if (!y_full_) rare_outputs_at(n);
   }
 
-  const Plant& plant_;
+  const Plant* plant_;
   FaultInjector<Plant>* faults_ = nullptr;       // a test's faults, or none
   ExpectationChecker<Plant>* checks_ = nullptr;  // a test's expectations, or none
   unsigned fault_mask_ = 0;                      // the faults acting at the current step

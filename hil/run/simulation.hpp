@@ -51,6 +51,13 @@ struct TestRecord {
   std::vector<ExpectOutcome> outcomes;  // the scenario's expectations, in order
 };
 
+// A saved state of a simulation (Simulation::save_state), opaque: only the simulation that
+// saved it (or one built from the same scenario and options) can restore it.
+class SimulationState {
+ public:
+  virtual ~SimulationState() = default;
+};
+
 class Simulation {
  public:
   virtual ~Simulation() = default;
@@ -93,6 +100,13 @@ class Simulation {
   virtual std::uint64_t fault_mask() const { return 0; }
   // Signals the CAN codec saturated (ecu.codec = "can"; else 0).
   virtual std::int64_t ecu_codec_saturations() const { return 0; }
+
+  // Between steps, not in the run phase (it allocates): the whole state now (plant, ECU,
+  // faults, expectations, runner), and back to such a state; the run then goes on from there
+  // bit for bit as it did (an FMU's get/set FMU state, for importers that roll back). restore
+  // is false for a state of another kind of simulation. Not with a port attached (a bus).
+  virtual std::unique_ptr<SimulationState> save_state() const { return nullptr; }
+  virtual bool restore_state(const SimulationState&) { return false; }
 };
 
 // The simulation of a loaded scenario, built by its vehicle kind's factory.

@@ -81,6 +81,21 @@ class SimulationOf final : public Simulation {
     return t;
   }
 
+  std::unique_ptr<SimulationState> save_state() const override {
+    return std::make_unique<Saved>(*plant_, controller_.get(), *faults_, *checks_, *runner_);
+  }
+  bool restore_state(const SimulationState& state) override {
+    const auto* s = dynamic_cast<const Saved*>(&state);
+    if (s == nullptr) return false;
+    if constexpr (!std::is_const_v<Plant>) *plant_ = s->plant;  // a const plant never changes (its state is the runner's)
+    if (controller_ && s->controller) *controller_ = *s->controller;
+    *faults_ = s->faults;
+    faults_->rebind(*plant_);
+    *checks_ = s->checks;
+    runner_->restore_state(s->runner);
+    return true;
+  }
+
   std::int64_t ecu_codec_saturations() const override {
     if constexpr (requires(const Controller& c) { c.saturated_signals(); }) {
       return controller_->saturated_signals();
@@ -105,6 +120,18 @@ class SimulationOf final : public Simulation {
 
  private:
   using R = Runner<Plant, Integrator, Controller>;
+  // save_state's copy: every object whose state moves in a run (their links to each other are
+  // the live ones again on restore)
+  struct Saved final : SimulationState {
+    Saved(const Plant& p, const Controller* c, const FaultInjector<Plant>& f, const ExpectationChecker<Plant>& e,
+          const R& r)
+        : plant(p), controller(c != nullptr ? std::make_unique<Controller>(*c) : nullptr), faults(f), checks(e), runner(r) {}
+    Plant plant;
+    std::unique_ptr<Controller> controller;
+    FaultInjector<Plant> faults;
+    ExpectationChecker<Plant> checks;
+    R runner;
+  };
   template <class S>
   bool sense_as(S& s) {
     if constexpr (std::is_same_v<S, typename SensorsOf<Plant>::type>) {

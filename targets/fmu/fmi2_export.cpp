@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The FMI 2.0 co-simulation functions of an ehpt FMU (io/fmi/fmi2_api.h): the same instance
 // (targets/fmu/fmu_instance.hpp) as FMI 3.0's, behind FMI 2.0's calls. Every function is
-// exported; what this FMU does not offer (Integer and String variables, FMU state, derivatives,
+// exported; what this FMU does not offer (Integer and String variables, a serialised FMU state, derivatives,
 // asynchronous steps) answers fmi2Error with a message saying so. Nothing throws across the C
 // boundary: an exception becomes fmi2Fatal with its text.
 
@@ -219,14 +219,30 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference[], size_t nvr
   return refuse(c, "fmi2SetString: this FMU has no String variable (only Real and Boolean)");
 }
 
-fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate*) {
-  return refuse(c, "fmi2GetFMUstate: not provided (canGetAndSetFMUstate = false)");
+// An FMU state is an ehpt::fmu::SavedState; *FMUstate given is overwritten, as the standard asks.
+fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* FMUstate) {
+  return guarded(c, [&](Fmu2& f) {
+    if (FMUstate == nullptr) return refuse(c, "fmi2GetFMUstate: FMUstate is NULL");
+    std::unique_ptr<ehpt::fmu::SavedState> state(static_cast<ehpt::fmu::SavedState*>(*FMUstate));
+    const bool done = f.instance->get_state(state);
+    *FMUstate = state.release();
+    return ok(done);
+  });
 }
-fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate) {
-  return refuse(c, "fmi2SetFMUstate: not provided (canGetAndSetFMUstate = false)");
+fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
+  return guarded(c, [&](Fmu2& f) {
+    if (FMUstate == nullptr) return refuse(c, "fmi2SetFMUstate: FMUstate is NULL");
+    f.terminated = false;
+    return ok(f.instance->set_state(*static_cast<const ehpt::fmu::SavedState*>(FMUstate)));
+  });
 }
-fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate*) {
-  return refuse(c, "fmi2FreeFMUstate: not provided (canGetAndSetFMUstate = false)");
+fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* FMUstate) {
+  if (c == nullptr) return fmi2Error;
+  if (FMUstate != nullptr) {
+    delete static_cast<ehpt::fmu::SavedState*>(*FMUstate);
+    *FMUstate = nullptr;
+  }
+  return fmi2OK;
 }
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate, size_t*) {
   return refuse(c, "fmi2SerializedFMUstateSize: not provided (canSerializeFMUstate = false)");

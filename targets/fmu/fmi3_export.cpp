@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The FMI 3.0 co-simulation functions of an ehpt FMU (io/fmi/fmi3_api.h), each a thin map onto
 // targets/fmu/fmu_instance.hpp. Every function of the API is exported, as importers look them
-// all; what this FMU does not offer (Float32, the integer types and strings, clocks, FMU state,
-// derivatives, Event Mode, Scheduled Execution) answers fmi3Error with a message saying so.
+// all; what this FMU does not offer (Float32, the integer types and strings, clocks, a serialised
+// FMU state, derivatives, Event Mode, Scheduled Execution) answers fmi3Error with a message saying so.
 // Nothing throws across the C boundary: an exception becomes fmi3Fatal with its text.
 
 #include <cstring>
@@ -197,14 +197,29 @@ fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference
   return refuse(instance, "fmi3GetVariableDependencies: not provided");
 }
 
-fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState*) {
-  return refuse(instance, "fmi3GetFMUState: not provided (canGetAndSetFMUState = false)");
+// An FMU state is an ehpt::fmu::SavedState; *FMUState given is overwritten, as the standard asks.
+fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState* FMUState) {
+  return guarded(instance, [&](Fmu3& f) {
+    if (FMUState == nullptr) return refuse(instance, "fmi3GetFMUState: FMUState is NULL");
+    std::unique_ptr<ehpt::fmu::SavedState> state(static_cast<ehpt::fmu::SavedState*>(*FMUState));
+    const bool done = f.instance->get_state(state);
+    *FMUState = state.release();
+    return ok(done);
+  });
 }
-fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState) {
-  return refuse(instance, "fmi3SetFMUState: not provided (canGetAndSetFMUState = false)");
+fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState) {
+  return guarded(instance, [&](Fmu3& f) {
+    if (FMUState == nullptr) return refuse(instance, "fmi3SetFMUState: FMUState is NULL");
+    return ok(f.instance->set_state(*static_cast<const ehpt::fmu::SavedState*>(FMUState)));
+  });
 }
-fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState*) {
-  return refuse(instance, "fmi3FreeFMUState: not provided (canGetAndSetFMUState = false)");
+fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState* FMUState) {
+  if (instance == nullptr) return fmi3Error;
+  if (FMUState != nullptr) {
+    delete static_cast<ehpt::fmu::SavedState*>(*FMUState);
+    *FMUState = nullptr;
+  }
+  return fmi3OK;
 }
 fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState, size_t*) {
   return refuse(instance, "fmi3SerializedFMUStateSize: not provided (canSerializeFMUState = false)");

@@ -213,7 +213,7 @@ std::string model_description_3(const Description& d, const std::string& model_i
   // no early return, no intermediate update, no event mode: what the SIL Kit importer accepts
   x += "  <CoSimulation modelIdentifier=\"" + xml_escape(model_identifier) +
        "\" canHandleVariableCommunicationStepSize=\"true\" fixedInternalStepSize=\"" + number(d.step_s) +
-       "\" canBeInstantiatedOnlyOncePerProcess=\"false\" canGetAndSetFMUState=\"false\" canSerializeFMUState=\"false\""
+       "\" canBeInstantiatedOnlyOncePerProcess=\"false\" canGetAndSetFMUState=\"true\" canSerializeFMUState=\"false\""
        " providesIntermediateUpdate=\"false\" mightReturnEarlyFromDoStep=\"false\""
        " canReturnEarlyAfterIntermediateUpdate=\"false\" hasEventMode=\"false\"/>\n";
   x += unit_definitions(d);
@@ -267,7 +267,7 @@ std::string model_description_2(const Description& d, const std::string& model_i
   x += "  <CoSimulation modelIdentifier=\"" + xml_escape(model_identifier) +
        "\" canHandleVariableCommunicationStepSize=\"true\" canInterpolateInputs=\"false\""
        " canRunAsynchronuously=\"false\" canBeInstantiatedOnlyOncePerProcess=\"false\""
-       " canNotUseMemoryManagementFunctions=\"true\" canGetAndSetFMUstate=\"false\" canSerializeFMUstate=\"false\"/>\n";
+       " canNotUseMemoryManagementFunctions=\"true\" canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"false\"/>\n";
   x += unit_definitions(d);
   x += "  <DefaultExperiment startTime=\"0\" stopTime=\"" + number(d.stop_s) + "\" stepSize=\"" + number(d.step_s) +
        "\"/>\n";

@@ -47,10 +47,10 @@ Instance::Instance(hil::Scenario sc, std::string scenario_path, std::vector<std:
 const char* Instance::name(Call c) const {
   static const char* const fmi3[] = {"fmi3EnterInitializationMode", "fmi3ExitInitializationMode", "fmi3DoStep",
                                      "fmi3GetFloat64", "fmi3GetBoolean", "fmi3SetFloat64", "fmi3SetBoolean",
-                                     "fmi3Terminate", "fmi3Reset"};
+                                     "fmi3Terminate", "fmi3Reset", "fmi3GetFMUState", "fmi3SetFMUState"};
   static const char* const fmi2[] = {"fmi2EnterInitializationMode", "fmi2ExitInitializationMode", "fmi2DoStep",
                                      "fmi2GetReal", "fmi2GetBoolean", "fmi2SetReal", "fmi2SetBoolean",
-                                     "fmi2Terminate", "fmi2Reset"};
+                                     "fmi2Terminate", "fmi2Reset", "fmi2GetFMUstate", "fmi2SetFMUstate"};
   return (fmi_ == Fmi::k3 ? fmi3 : fmi2)[static_cast<int>(c)];
 }
 
@@ -325,6 +325,36 @@ bool Instance::set_float64(const std::uint32_t* vrs, std::size_t n, const double
 }
 bool Instance::set_boolean(const std::uint32_t* vrs, std::size_t n, const bool* values, std::size_t n_values) {
   return set_values(name(Call::kSetBoolean), Type::kBoolean, vrs, n, values, n_values);
+}
+
+bool Instance::get_state(std::unique_ptr<SavedState>& out) {
+  if (state_ != State::kStep && state_ != State::kTerminated) return in(State::kStep, name(Call::kGetState));
+  if (!out) out = std::make_unique<SavedState>();
+  out->sim = sim_->save_state();
+  if (!out->sim) return fail(std::string(name(Call::kGetState)) + ": this simulation cannot save its state");
+  out->values = values_;
+  out->psd_sensors = psd_sensors_;
+  out->ev_sensors = ev_sensors_;
+  out->psd_command = psd_command_;
+  out->ev_command = ev_command_;
+  out->state = static_cast<int>(state_);
+  out->stop_s = stop_s_;
+  return true;
+}
+
+bool Instance::set_state(const SavedState& saved) {
+  if (state_ != State::kStep && state_ != State::kTerminated) return in(State::kStep, name(Call::kSetState));
+  if (!saved.sim || saved.values.size() != values_.size() || !sim_->restore_state(*saved.sim)) {
+    return fail(std::string(name(Call::kSetState)) + ": not a state of this FMU");
+  }
+  values_ = saved.values;
+  psd_sensors_ = saved.psd_sensors;
+  ev_sensors_ = saved.ev_sensors;
+  psd_command_ = saved.psd_command;
+  ev_command_ = saved.ev_command;
+  state_ = static_cast<State>(saved.state);
+  stop_s_ = saved.stop_s;
+  return true;
 }
 
 bool Instance::terminate() {

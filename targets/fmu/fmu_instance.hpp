@@ -40,6 +40,18 @@ struct Log {
 // Which standard's functions call in: the names its messages give the calls.
 enum class Fmi { k2, k3 };
 
+// An FMU state (fmi3GetFMUState): everything an instance needs to go on from a point.
+struct SavedState {
+  std::unique_ptr<hil::SimulationState> sim;
+  std::vector<double> values;
+  msgs::PsdSensors psd_sensors{};
+  msgs::EvSensors ev_sensors{};
+  msgs::PsdCommand psd_command{};
+  msgs::EvCommand ev_command{};
+  int state = 0;
+  double stop_s = 0.0;
+};
+
 class Instance {
  public:
   // nullptr if the resources do not hold a loadable scenario or the token (FMI 2: the guid) is
@@ -64,13 +76,18 @@ class Instance {
   bool set_boolean(const std::uint32_t* vrs, std::size_t n, const bool* values, std::size_t n_values);
   bool terminate();
   bool reset();
+  // After initialization (Step Mode, or Terminated by a plant fault): the state now, into out
+  // (reused if given); and back to one (of this FMU). The run then goes on bit for bit as it
+  // did from there. They allocate (the state's copies), doStep does not.
+  bool get_state(std::unique_ptr<SavedState>& out);
+  bool set_state(const SavedState& saved);
 
   const Description& description() const { return description_; }
 
  private:
   enum class State { kInstantiated, kInitialization, kStep, kTerminated, kError };
   enum class Call { kEnterInitialization, kExitInitialization, kDoStep, kGetReal, kGetBoolean, kSetReal, kSetBoolean,
-                    kTerminate, kReset };
+                    kTerminate, kReset, kGetState, kSetState };
   Instance(hil::Scenario sc, std::string scenario_path, std::vector<std::string> sets, EcuMode ecu, Log log, Fmi fmi,
            const std::vector<std::pair<std::string, double>>& numbers);
   // the scenario with the manifest's overrides, the importer's stop time and its parameters

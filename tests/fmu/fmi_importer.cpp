@@ -137,7 +137,9 @@ bool Fmi3Fmu::open(const std::string& fmu_path, std::string& error) {
            symbol(library_, "fmi2SetReal", set_real2, error) && symbol(library_, "fmi2GetBoolean", get_boolean2, error) &&
            symbol(library_, "fmi2SetBoolean", set_boolean2, error) && symbol(library_, "fmi2Terminate", terminate2, error) &&
            symbol(library_, "fmi2GetBooleanStatus", get_boolean_status2, error) &&
-           symbol(library_, "fmi2GetVersion", get_version2, error);
+           symbol(library_, "fmi2GetVersion", get_version2, error) &&
+           symbol(library_, "fmi2GetFMUstate", get_state2, error) && symbol(library_, "fmi2SetFMUstate", set_state2, error) &&
+           symbol(library_, "fmi2FreeFMUstate", free_state2, error);
   }
   return symbol(library_, "fmi3InstantiateCoSimulation", instantiate, error) &&
          symbol(library_, "fmi3FreeInstance", free_instance, error) &&
@@ -146,7 +148,9 @@ bool Fmi3Fmu::open(const std::string& fmu_path, std::string& error) {
          symbol(library_, "fmi3DoStep", do_step, error) && symbol(library_, "fmi3GetFloat64", get_float64, error) &&
          symbol(library_, "fmi3SetFloat64", set_float64, error) && symbol(library_, "fmi3GetBoolean", get_boolean, error) &&
          symbol(library_, "fmi3SetBoolean", set_boolean, error) && symbol(library_, "fmi3Terminate", terminate, error) &&
-         symbol(library_, "fmi3Reset", reset, error) && symbol(library_, "fmi3GetVersion", get_version, error);
+         symbol(library_, "fmi3Reset", reset, error) && symbol(library_, "fmi3GetVersion", get_version, error) &&
+         symbol(library_, "fmi3GetFMUState", get_state, error) && symbol(library_, "fmi3SetFMUState", set_state, error) &&
+         symbol(library_, "fmi3FreeFMUState", free_state, error);
 }
 
 fmi3Instance Fmi3Fmu::make_instance(const char* name, const char* token_override) {

@@ -51,6 +51,9 @@ class Fmi3Fmu {
   fmi3TerminateTYPE* terminate = nullptr;
   fmi3ResetTYPE* reset = nullptr;
   fmi3GetVersionTYPE* get_version = nullptr;
+  fmi3GetFMUStateTYPE* get_state = nullptr;
+  fmi3SetFMUStateTYPE* set_state = nullptr;
+  fmi3FreeFMUStateTYPE* free_state = nullptr;
 
   // FMI 2.0
   fmi2InstantiateTYPE* instantiate2 = nullptr;
@@ -66,6 +69,9 @@ class Fmi3Fmu {
   fmi2TerminateTYPE* terminate2 = nullptr;
   fmi2GetBooleanStatusTYPE* get_boolean_status2 = nullptr;
   fmi2GetVersionTYPE* get_version2 = nullptr;
+  fmi2GetFMUstateTYPE* get_state2 = nullptr;
+  fmi2SetFMUstateTYPE* set_state2 = nullptr;
+  fmi2FreeFMUstateTYPE* free_state2 = nullptr;
   // instantiate (FMI 2.0) with this FMU's guid and resources as a file URI, logging into `log`
   fmi2Component make_instance2(const char* name, const char* guid_override = nullptr);
 

@@ -250,6 +250,96 @@ TEST_F(Fmu3, WrongCallsAreErrorsWithAMessage) {
   EXPECT_TRUE(logged(fmu, "psecu2.toml")) << (fmu.log.empty() ? "" : fmu.log.back());
 }
 
+// FMU state (for importers that roll back): run to 12 s, save, run to 18 s, restore, run to
+// 18 s again: the same outputs bit for bit, and both are `ehpt run`'s. A state saved, then
+// overwritten by a later save (the standard's reuse), restores the later point. Through FMI
+// 2.0 the same. A state is not taken before initialization.
+TEST_F(Fmu3, AStateSavedAndRestoredGoesOnBitForBit) {
+  for (const char* file : {"/p.fmu", "/s2.fmu"}) {
+    if (std::string(file) == "/s2.fmu") {
+      ASSERT_EQ(ehpt({"fmu", "psecu2_nedc", "--fmi", "2", "--set", "solver.duration_s=20", "--out", *dir_ + file}), 0);
+    }
+    Fmi3Fmu fmu;
+    std::string error;
+    ASSERT_TRUE(fmu.open(*dir_ + file, error)) << error;
+    ASSERT_NE(fmu.xml.find(fmu.version == 3 ? "canGetAndSetFMUState=\"true\"" : "canGetAndSetFMUstate=\"true\""),
+              std::string::npos);
+    const bool v3 = fmu.version == 3;
+    void* inst = v3 ? fmu.make_instance("state") : fmu.make_instance2("state");
+    ASSERT_NE(inst, nullptr);
+    void* early = nullptr;
+    if (v3) {
+      EXPECT_EQ(fmu.get_state(inst, &early), fmi3Error);  // before initialization
+      EXPECT_TRUE(logged(fmu, "fmi3GetFMUState called in Instantiated"));
+      fmu.free_instance(inst);
+      inst = fmu.make_instance("state");
+      ASSERT_EQ(fmu.enter_initialization(inst, fmi3False, 0.0, 0.0, fmi3True, 20.0), fmi3OK);
+      ASSERT_EQ(fmu.exit_initialization(inst), fmi3OK);
+    } else {
+      ASSERT_EQ(fmu.setup_experiment2(inst, fmi2False, 0.0, 0.0, fmi2True, 20.0), fmi2OK);
+      ASSERT_EQ(fmu.enter_initialization2(inst), fmi2OK);
+      ASSERT_EQ(fmu.exit_initialization2(inst), fmi2OK);
+    }
+    std::vector<fmi3ValueReference> refs;
+    for (const std::string& n : fmu.output_names) refs.push_back(fmu.vr.at(n));
+    // steps of 10 ms from point a to point b, the outputs after each
+    const auto run = [&](std::int64_t a, std::int64_t b, std::vector<std::vector<double>>& rows) {
+      for (std::int64_t n = a; n < b; ++n) {
+        std::vector<double> y(refs.size());
+        bool okay;
+        if (v3) {
+          fmi3Boolean e, term, er;
+          fmi3Float64 last;
+          okay = fmu.do_step(inst, static_cast<double>(n) * 0.01, 0.01, fmi3False, &e, &term, &er, &last) == fmi3OK &&
+                 fmu.get_float64(inst, refs.data(), refs.size(), y.data(), y.size()) == fmi3OK;
+        } else {
+          okay = fmu.do_step2(inst, static_cast<double>(n) * 0.01, 0.01, fmi2False) == fmi2OK &&
+                 fmu.get_real2(inst, refs.data(), refs.size(), y.data()) == fmi2OK;
+        }
+        if (!okay) return false;
+        y.insert(y.begin(), static_cast<double>(n + 1) * 0.01);
+        rows.push_back(std::move(y));
+      }
+      return true;
+    };
+    std::vector<std::vector<double>> to5, first, second, scratch;
+    ASSERT_TRUE(run(0, 1100, scratch));
+    void* state = nullptr;
+    ASSERT_EQ(v3 ? static_cast<int>(fmu.get_state(inst, &state)) : static_cast<int>(fmu.get_state2(inst, &state)), 0);  // at 11 s, then overwritten:
+    ASSERT_TRUE(run(1100, 1200, to5));
+    void* same = state;
+    ASSERT_EQ(v3 ? static_cast<int>(fmu.get_state(inst, &state)) : static_cast<int>(fmu.get_state2(inst, &state)), 0);  // at 12 s
+    EXPECT_EQ(state, same);  // the state given was reused
+    ASSERT_TRUE(run(1200, 1800, first));
+    ASSERT_EQ(v3 ? static_cast<int>(fmu.set_state(inst, state)) : static_cast<int>(fmu.set_state2(inst, state)), 0);
+    ASSERT_TRUE(run(1200, 1800, second));
+    ASSERT_EQ(first.size(), second.size());
+    int differ = 0;
+    for (std::size_t r = 0; r < first.size(); ++r) {
+      for (std::size_t j = 0; j < first[r].size(); ++j) differ += same_bits(first[r][j], second[r][j]) ? 0 : 1;
+    }
+    EXPECT_EQ(differ, 0) << file;
+    int off_run = 0;  // and ehpt run's: row r is plant step 12 010 + 10 r
+    for (std::size_t r = 0; r < second.size(); ++r) {
+      const std::size_t step = (1200 + r + 1) * 10;
+      for (std::size_t j = 0; j < fmu.output_names.size(); ++j) {
+        off_run += same_bits(second[r][j + 1], ref_->at(fmu.output_names[j])[step]) ? 0 : 1;
+      }
+    }
+    EXPECT_EQ(off_run, 0) << file;
+    // the car accelerates from 11 s: a restore to the overwritten 11 s state would show
+    EXPECT_GT(first.front()[2], to5.front()[2]);
+    if (v3) {
+      EXPECT_EQ(fmu.free_state(inst, &state), fmi3OK);
+      EXPECT_EQ(state, nullptr);
+      fmu.free_instance(inst);
+    } else {
+      EXPECT_EQ(fmu.free_state2(inst, &state), fmi2OK);
+      fmu.free_instance2(inst);
+    }
+  }
+}
+
 // A plant fault that stops `ehpt run` (exit 3: here the SOC leaves its window at 14.574 s)
 // ends the FMU's run where it ends the CLI's: fmi3Discard with terminateSimulation and
 // lastSuccessfulTime there, the fault in the log, and fmi3Terminate still answers OK.
