@@ -43,7 +43,7 @@ const char* kFmuHelp =
     "                   (the default)\n"
     "  --ecu none       the importer is the ECU: the command message's fields are inputs\n"
     "                   (command.motTauRef_Nm, ...), the sensor message's outputs\n"
-    "                   (sensors.batSOC, ...), as an ECU on the bus sees them\n"
+    "                   (sensors.batSOC, ...), sampled at each communication point\n"
     "  --fmi 3|2        the FMI version: 3.0 (the default) or 2.0 (Simulink, OMSimulator, FMPy\n"
     "                   and older importers); the same variables and trajectory\n"
     "  --out FILE.fmu   where to write it (default out/<scenario name>.fmu); never over an\n"

@@ -122,7 +122,7 @@ void add_message_fields(Description& d, std::uint32_t& vr) {
     v.name = "sensors." + std::string(sensors[i].name);
     v.unit = fmi_unit(sensors[i].unit);
     v.description = "sensor message field " + std::string(sensors[i].name) + kind_text(sensors[i].kind) +
-                    ", as the ECU reads it at its last sample";
+                    ", sampled at the communication point as an ECU reads it (sensor faults applied)";
     v.type = sensors[i].kind == msgs::FieldKind::kFlag ? Type::kBoolean : Type::kFloat64;
     v.source = Source::kSensor;
     v.index = static_cast<int>(i);
