@@ -39,15 +39,7 @@ class SocketCanTransport final : public Transport {
     out.can_id = frame.extended ? (frame.id | CAN_EFF_FLAG) : frame.id;
     out.len = frame.len;
     std::memcpy(out.data, frame.data.data(), frame.len);
-    ssize_t written = -1;
-    do {
-      written = ::write(fd_, &out, sizeof out);
-    } while (written < 0 && errno == EINTR);
-    // EAGAIN/ENOBUFS (queue full) and ENETDOWN alike: the frame is lost, the run goes on
-    if (written != static_cast<ssize_t>(sizeof out)) {
-      ++counters_.send_dropped;
-      return false;
-    }
+    if (!write_frame(out)) return false;
     ++counters_.frames_out;
     return true;
   }
@@ -114,14 +106,7 @@ class SocketCanTransport final : public Transport {
     error_frame_bits(kind, id, data);
     out.can_id = id;
     std::memcpy(out.data, data.data(), data.size());
-    ssize_t written = -1;
-    do {
-      written = ::write(fd_, &out, sizeof out);
-    } while (written < 0 && errno == EINTR);
-    if (written != static_cast<ssize_t>(sizeof out)) {
-      ++counters_.send_dropped;
-      return false;
-    }
+    if (!write_frame(out)) return false;
     ++counters_.error_frames_sent;
     return true;
   }
@@ -129,6 +114,18 @@ class SocketCanTransport final : public Transport {
   std::string describe() const override { return description_; }
 
  private:
+  // One frame to the socket (EINTR retried). EAGAIN/ENOBUFS (queue full) and ENETDOWN alike:
+  // the frame is lost (send_dropped), the run goes on.
+  bool write_frame(const struct can_frame& out) {
+    ssize_t written = -1;
+    do {
+      written = ::write(fd_, &out, sizeof out);
+    } while (written < 0 && errno == EINTR);
+    if (written == static_cast<ssize_t>(sizeof out)) return true;
+    ++counters_.send_dropped;
+    return false;
+  }
+
   int fd_;
   std::string description_;
   TransportCounters counters_;

@@ -41,6 +41,7 @@ Instance::Instance(hil::Scenario sc, std::string scenario_path, std::vector<std:
     values_[v.vr] = v.start;
     if (v.source == Source::kSignal) signal_vrs_.emplace_back(v.vr, static_cast<std::size_t>(v.index));
     if (v.source == Source::kSensor) sensor_vrs_.emplace_back(v.vr, static_cast<std::size_t>(v.index));
+    if (v.source == Source::kCommand) command_vrs_.emplace_back(v.vr, static_cast<std::size_t>(v.index));
   }
 }
 
@@ -140,13 +141,11 @@ void Instance::refresh_outputs() {
 }
 
 void Instance::apply_inputs() {
-  for (const Variable& v : description_.variables) {
-    if (v.source != Source::kCommand) continue;
-    const auto i = static_cast<std::size_t>(v.index);
+  for (const auto& [vr, i] : command_vrs_) {
     if (description_.psd) {
-      msgs::kPsdCommandFieldTable[i].set(psd_command_, values_[v.vr]);
+      msgs::kPsdCommandFieldTable[i].set(psd_command_, values_[vr]);
     } else {
-      msgs::kEvCommandFieldTable[i].set(ev_command_, values_[v.vr]);
+      msgs::kEvCommandFieldTable[i].set(ev_command_, values_[vr]);
     }
   }
   if (description_.psd) {

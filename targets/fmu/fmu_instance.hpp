@@ -117,9 +117,9 @@ class Instance {
   EcuMode ecu_;
   Fmi fmi_;
   std::vector<double> values_;   // every variable's value at the current point, by value reference
-  // (value reference, index) of the signals and of the sensor fields: what each step refreshes,
-  // without walking the parameters
-  std::vector<std::pair<std::uint32_t, std::size_t>> signal_vrs_, sensor_vrs_;
+  // (value reference, index) of the signals, the sensor fields and the command fields: what
+  // each step refreshes or applies, without walking the parameters
+  std::vector<std::pair<std::uint32_t, std::size_t>> signal_vrs_, sensor_vrs_, command_vrs_;
   msgs::PsdSensors psd_sensors_{};
   msgs::EvSensors ev_sensors_{};
   msgs::PsdCommand psd_command_{};
