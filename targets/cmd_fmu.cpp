@@ -9,7 +9,9 @@
 #include <iostream>
 #include <set>
 
-#include "hil/bus/bus_plant.hpp"  // can_run_on_bus: --ecu none has the bus's rule
+#include "hil/bus/bus_binding.hpp"  // builtin_ehpt_dbc: the LS-BUS FMU's contract
+#include "hil/bus/bus_ecu.hpp"      // has_bus_ecu: --role ecu
+#include "hil/bus/bus_plant.hpp"    // can_run_on_bus: --ecu none has the bus's rule
 #include "hil/config/config.hpp"
 #include "hil/diag/provenance.hpp"
 #include "io/junit.hpp"
@@ -32,6 +34,7 @@ namespace {
 const char* kFmuHelp =
     "usage: ehpt fmu SCENARIO [--fmi 3|2] [--ecu builtin|none] [--out FILE.fmu]\n"
     "                [--set key=value ...] [--variables]\n"
+    "       ehpt fmu SCENARIO --bus ls-bus [--role plant|ecu] [--out FILE.fmu] ...\n"
     "\n"
     "Builds an FMI 3.0 (or 2.0) co-simulation FMU of the scenario for x86_64-linux: its\n"
     "vehicle on the scenario's cycle, every output of 'ehpt signals SCENARIO' an FMU output\n"
@@ -44,6 +47,15 @@ const char* kFmuHelp =
     "  --ecu none       the importer is the ECU: the command message's fields are inputs\n"
     "                   (command.motTauRef_Nm, ...), the sensor message's outputs\n"
     "                   (sensors.batSOC, ...), sampled at each communication point\n"
+    "  --bus ls-bus     the ECU is on a CAN bus: one FMI-LS-BUS CAN terminal (CAN.Tx_Data,\n"
+    "                   CAN.Tx_Clock, CAN.Rx_Data, CAN.Rx_Clock) carries the frames of ehpt's\n"
+    "                   contract (the DBC is in the FMU, extra/org.fmi-standard.fmi-ls-bus/);\n"
+    "                   Event Mode, triggered clocks; each ECU sample must be a communication\n"
+    "                   point. FMI 3.0 only. docs/fmu.md: the calling sequence\n"
+    "  --role plant|ecu with --bus: the plant (the default; it waits for its ECU's command\n"
+    "                   frames as 'ehpt plant --lockstep' does) or the scenario's built-in ECU\n"
+    "                   alone on the terminal (as 'ehpt ecu' is on a bus): connect the two\n"
+    "                   Tx_Data -> Rx_Data and the run is 'ehpt run --set vehicle.ecu.codec=can'\n"
     "  --fmi 3|2        the FMI version: 3.0 (the default) or 2.0 (Simulink, OMSimulator, FMPy\n"
     "                   and older importers); the same variables and trajectory\n"
     "  --out FILE.fmu   where to write it (default out/<scenario name>.fmu); never over an\n"
@@ -84,8 +96,10 @@ std::string documentation_page(const fmu::Description& d, const std::string& id,
   std::string h = "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>" + xml_escape(id) +
                   "</title></head><body>\n<h1>" + xml_escape(d.model_name) + "</h1>\n<p>" + xml_escape(d.description) +
                   "</p>\n<p>An FMI " + fmi + ".0 co-simulation FMU made by ehpt (BSD-3-Clause): the vehicle on the scenario's "
-                  "cycle, " + (d.ecu == fmu::EcuMode::kNone ? "its ECU the importer (command.* inputs, sensors.* outputs)"
-                                                            : "driven by its built-in ECU") +
+                  "cycle, " + (d.role == fmu::Role::kEcu      ? "this FMU being its built-in ECU alone on an FMI-LS-BUS CAN terminal"
+                                : d.ecu == fmu::EcuMode::kBus  ? "its ECU on an FMI-LS-BUS CAN terminal (Event Mode)"
+                                : d.ecu == fmu::EcuMode::kNone ? "its ECU the importer (command.* inputs, sensors.* outputs)"
+                                                               : "driven by its built-in ECU") +
                   ". Communication steps are whole multiples of " +
                   xml_escape(io::number_text(d.step_s)) + " s; startTime 0. Licences: licenses/.</p>\n";
   h += "<table>\n<tr><th>valueReference</th><th>name</th><th>causality</th><th>unit</th><th>description</th></tr>\n";
@@ -111,12 +125,17 @@ std::string variables_table(const fmu::Description& d, const std::string& fmi) {
                             : v.causality == fmu::Causality::kParameter ? "parameter"
                                                                         : "output";
     std::string start;
-    if (v.causality == fmu::Causality::kInput || v.causality == fmu::Causality::kParameter) {
+    const bool scalar = v.type == fmu::Type::kFloat64 || v.type == fmu::Type::kBoolean;  // Binary, Clock: no start here
+    if (scalar && (v.causality == fmu::Causality::kInput || v.causality == fmu::Causality::kParameter)) {
       start = v.type == fmu::Type::kBoolean ? (v.start != 0.0 ? "true" : "false") : io::number_text(v.start);
     }
     std::string description = v.description;
     for (char& c : description) c = c == '|' ? '/' : c;
-    t += "| " + std::to_string(v.vr) + " | `" + v.name + "` | " + causality + (v.type == fmu::Type::kBoolean ? " (Boolean)" : "") +
+    t += "| " + std::to_string(v.vr) + " | `" + v.name + "` | " + causality +
+         (v.type == fmu::Type::kBoolean  ? " (Boolean)"
+          : v.type == fmu::Type::kBinary ? " (Binary)"
+          : v.type == fmu::Type::kClock  ? " (Clock)"
+                                         : "") +
          " | " + v.unit + " | " + start + " | " + description + " |\n";
   }
   return t;
@@ -126,12 +145,14 @@ std::string variables_table(const fmu::Description& d, const std::string& fmi) {
 
 int cmd_fmu(const std::vector<std::string>& args) {
   if (wants_help(args)) return out(kFmuHelp) ? 0 : 1;
-  std::string scenario, out_path, fmi = "3", ecu = "builtin";
+  std::string scenario, out_path, fmi = "3", ecu = "builtin", bus, role = "plant";
+  bool ecu_given = false;
   bool list_variables = false;
   std::vector<std::string> sets;
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
-    if ((a == "--out" || a == "--set" || a == "--fmi" || a == "--ecu") && i + 1 >= args.size()) {
+    if ((a == "--out" || a == "--set" || a == "--fmi" || a == "--ecu" || a == "--bus" || a == "--role") &&
+        i + 1 >= args.size()) {
       std::cerr << a << " needs a value\n" << kFmuHelp;
       return 1;
     }
@@ -143,6 +164,11 @@ int cmd_fmu(const std::vector<std::string>& args) {
       fmi = args[++i];
     } else if (a == "--ecu") {
       ecu = args[++i];
+      ecu_given = true;
+    } else if (a == "--bus") {
+      bus = args[++i];
+    } else if (a == "--role") {
+      role = args[++i];
     } else if (a == "--variables") {
       list_variables = true;
     } else if (!a.empty() && a[0] == '-') {
@@ -168,9 +194,36 @@ int cmd_fmu(const std::vector<std::string>& args) {
     std::cerr << "--ecu " << ecu << ": builtin (the scenario's ECU drives the plant) or none (the importer is the ECU)\n";
     return 2;
   }
-  const fmu::EcuMode mode = ecu == "none" ? fmu::EcuMode::kNone : fmu::EcuMode::kBuiltin;
+  if (!bus.empty() && bus != "ls-bus") {
+    std::cerr << "--bus " << bus << ": ls-bus (an FMI-LS-BUS CAN terminal) is the one bus an FMU has\n";
+    return 2;
+  }
+  if (role != "plant" && role != "ecu") {
+    std::cerr << "--role " << role << ": plant or ecu\n";
+    return 2;
+  }
+  if (role == "ecu" && bus.empty()) {
+    std::cerr << "--role ecu: the ECU alone is an FMU on a bus: give --bus ls-bus too\n";
+    return 2;
+  }
+  if (!bus.empty() && (fmi != "3" || ecu_given)) {
+    std::cerr << "--bus ls-bus: " << (fmi != "3" ? "FMI-LS-BUS is FMI 3.0's (clocks, Event Mode): leave --fmi at 3"
+                                                 : "the ECU is on the bus: --ecu does not apply (--role ecu makes the ECU's FMU)")
+              << "\n";
+    return 2;
+  }
+  const fmu::EcuMode mode = !bus.empty() ? fmu::EcuMode::kBus : ecu == "none" ? fmu::EcuMode::kNone : fmu::EcuMode::kBuiltin;
+  const fmu::Role fmu_role = role == "ecu" ? fmu::Role::kEcu : fmu::Role::kPlant;
   hil::Scenario sc;
   if (const int rc = load(scenario, sets, sc); rc != 0) return rc;
+  if (std::string why; mode == fmu::EcuMode::kBus && !hil::can_run_on_bus(sc, why)) {
+    std::cerr << "error: --bus ls-bus: " << why << "\n";
+    return 2;
+  }
+  if (std::string why; fmu_role == fmu::Role::kEcu && !hil::has_bus_ecu(sc, why)) {
+    std::cerr << "error: --role ecu: " << why << "\n";
+    return 2;
+  }
   if (std::string why; mode == fmu::EcuMode::kNone && !hil::can_run_on_bus(sc, why)) {
     // the same rule as a bus: a rig has no messages; an ECU latency belongs to the built-in ECU
     std::cerr << "error: --ecu none: " << why << "\n";
@@ -189,7 +242,7 @@ int cmd_fmu(const std::vector<std::string>& args) {
       for (const std::string& e : load_errors) std::cerr << e << "\n";
       return 2;
     }
-    return out(variables_table(fmu::describe(sc, mode, numbers), fmi)) ? 0 : 1;
+    return out(variables_table(fmu::describe(sc, mode, numbers, fmu_role), fmi)) ? 0 : 1;
   }
   if (out_path.empty()) out_path = "out/" + sc.name + ".fmu";
   std::error_code ec;
@@ -198,7 +251,9 @@ int cmd_fmu(const std::vector<std::string>& args) {
               << " is there already; ehpt fmu never writes over a path (remove it, or give another --out)\n";
     return 2;
   }
-  const std::string id = identifier_of(sc.name) + (mode == fmu::EcuMode::kNone ? "_plant" : "");
+  const std::string id = identifier_of(sc.name) + (fmu_role == fmu::Role::kEcu      ? "_ecu"
+                                                   : mode != fmu::EcuMode::kBuiltin ? "_plant"
+                                                                                    : "");
   std::string error;
 
   // resources/: every file the scenario read, under the folder that holds them all
@@ -253,11 +308,13 @@ int cmd_fmu(const std::vector<std::string>& args) {
   std::string digest_input;
   for (const io::ZipEntry& e : entries) digest_input += e.name + '\0' + io::sha256_hex(e.data) + '\n';
   for (const std::string& s : sets) digest_input += "set " + s + '\n';
-  digest_input += "ecu " + ecu + "\nfmi " + fmi + '\n';
+  digest_input += "ecu " + ecu + "\nfmi " + fmi + "\nbus " + bus + "\nrole " + role + '\n';
   const std::string token = "{" + io::sha256_hex(digest_input).substr(0, 32) + "}";
   std::string manifest = "# ehpt fmu 1\ntoken " + token + "\nscenario " + scenario_rel + "\n";
   for (const std::string& s : sets) manifest += "set " + s + "\n";
   if (mode == fmu::EcuMode::kNone) manifest += "ecu none\n";
+  if (mode == fmu::EcuMode::kBus) manifest += "bus ls-bus\n";
+  if (fmu_role == fmu::Role::kEcu) manifest += "role ecu\n";
   entries.push_back({std::string("resources/") + fmu::kManifestName, manifest});
 
   std::vector<std::pair<std::string, double>> numbers;  // the vehicle's: the FMU's parameters
@@ -266,7 +323,12 @@ int cmd_fmu(const std::vector<std::string>& args) {
     for (const std::string& e : load_errors) std::cerr << e << "\n";
     return 2;
   }
-  const fmu::Description d = fmu::describe(sc, mode, numbers);
+  const fmu::Description d = fmu::describe(sc, mode, numbers, fmu_role);
+  if (mode == fmu::EcuMode::kBus) {  // the terminal, the layered standard's manifest, the contract
+    entries.push_back({"terminalsAndIcons/terminalsAndIcons.xml", fmu::terminals_and_icons(d)});
+    entries.push_back({"extra/org.fmi-standard.fmi-ls-bus/fmi-ls-manifest.xml", fmu::ls_bus_manifest()});
+    entries.push_back({"extra/org.fmi-standard.fmi-ls-bus/ehpt.dbc", std::string(hil::builtin_ehpt_dbc())});
+  }
   const std::string tool = "ehpt " + std::string(hil::build_info().version);
   entries.insert(entries.begin(), io::ZipEntry{"modelDescription.xml", fmi == "3"
                                                                             ? fmu::model_description_3(d, id, token, tool)

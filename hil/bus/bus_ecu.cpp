@@ -8,10 +8,12 @@
 #include "ecu/ev_follower.hpp"
 #include "ecu/psd_ecu.hpp"
 #include "hil/bus/bus_family.hpp"
-#include "hil/bus/bus_wire_lcm.hpp"
 #include "hil/run/pacer.hpp"
 #include "io/can/codec.hpp"
+#ifndef EHPT_BUS_NO_LCM  // an FMU's library (CMakeLists.txt: ehpt_fmu_core) speaks CAN only, without liblcm
+#include "hil/bus/bus_wire_lcm.hpp"
 #include "io/lcm/lcm_codec.hpp"
+#endif
 
 namespace ehpt::hil {
 
@@ -102,6 +104,7 @@ class CanEcuWire {
   std::int64_t incomplete_ = 0;
 };
 
+#ifndef EHPT_BUS_NO_LCM
 // The ECU's side over LCM: one message per sample, one per command. It follows one plant
 // session (the first it hears, or a new one once the followed plant has been silent for
 // kSessionSilence_ns: a restarted plant) and names it in every command; samples of other
@@ -183,6 +186,7 @@ class LcmEcuWire {
   static constexpr std::int64_t kSessionSilence_ns = 1'000'000'000;
   std::int64_t session_ = 0, heard_ns_ = 0;  // the followed plant session, when it was last heard
 };
+#endif
 
 // Every complete sample that has come in, answered; true if anything of the plant's came.
 template <class Wire, class Controller, class Command>
@@ -310,6 +314,7 @@ BusEcuResult run_bus_ecu(const Scenario& sc, io::can::Transport& bus, const BusE
       opt, stop, log);
 }
 
+#ifndef EHPT_BUS_NO_LCM
 BusEcuResult run_bus_ecu(const Scenario& sc, io::lcm::LcmBus& bus, const std::string& prefix,
                          const BusEcuOptions& opt, const std::atomic<int>* stop, std::ostream& log) {
   std::string error;
@@ -323,5 +328,6 @@ BusEcuResult run_bus_ecu(const Scenario& sc, io::lcm::LcmBus& bus, const std::st
   if (!error.empty()) log << "error: " << error << "\n";
   return res;
 }
+#endif
 
 }  // namespace ehpt::hil

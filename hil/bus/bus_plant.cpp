@@ -11,7 +11,9 @@
 #include "ecu/psd_ecu.hpp"
 #include "hil/bus/bus_family.hpp"
 #include "hil/bus/bus_wire_can.hpp"
+#ifndef EHPT_BUS_NO_LCM  // an FMU's library (CMakeLists.txt: ehpt_fmu_core) speaks CAN only, without liblcm
 #include "hil/bus/bus_wire_lcm.hpp"
+#endif
 #include "hil/run/latency_histogram.hpp"
 #include "hil/run/pacer.hpp"
 #include "hil/run/port.hpp"
@@ -78,11 +80,34 @@ class BusPlant final : public ExternalDriver,
     started_ = true;
     stop_ = stop;
     sim_ = &sim;
+    if (opt_.event_mode) {  // sample 0 goes out now; its command comes in the Event Mode after initialization
+      Sensors s;
+      sim.read_sensors(s);
+      send_sample(s, 0);
+      sent_ahead_ = 0;
+      if (!sim.attach(this, nullptr)) attach_error_ = "the bus plant's messages are not this vehicle's";
+      sim.defer_exchange();
+      return;
+    }
     wait_for_peer();
     first_command(sim);
     if (!sim.attach(this, opt_.lockstep || opt_.realtime ? nullptr : this)) {
       attach_error_ = "the bus plant's messages are not this vehicle's";
     }
+  }
+
+  // (event_mode) The sample the simulation stopped at goes out now, ahead of its exchange.
+  bool send_ahead() override {
+    if (!opt_.event_mode || sim_ == nullptr) return false;
+    const std::int64_t n = sim_->step_index();
+    if (n % ratio_ != 0 || n == last_sample_ || sim_->finished()) return false;
+    const IoTime io(*this);
+    read_fault_mask(n);
+    Sensors s;
+    sim_->read_sensors(s);
+    send_sample(s, n);
+    sent_ahead_ = n;
+    return true;
   }
 
   // (a) Wall clock and real time: what came in; each complete, fresh command acts from n.
@@ -94,10 +119,14 @@ class BusPlant final : public ExternalDriver,
   }
   // (b) The sensors at t_n (sample 0 went out at start-up); lockstep waits for its command.
   bool sample(std::int64_t n, const Sensors& s, Command& command) override {
-    if (n == last_sample_) return false;
+    const bool ahead = sent_ahead_ == n;  // event_mode: it went out at the end of the last step
+    if (n == last_sample_ && !ahead) return false;
+    sent_ahead_ = -1;
     const IoTime io(*this);
-    read_fault_mask(n);
-    send_sample(s, n);
+    if (!ahead) {
+      read_fault_mask(n);
+      send_sample(s, n);
+    }
     if (!opt_.lockstep) return false;
     if (!wire_.sample_intact()) {
       // a bus fault changed what the ECU got of this sample: it may answer or not, at a time
@@ -428,6 +457,7 @@ class BusPlant final : public ExternalDriver,
   Command applied_{};
   bool started_ = false, safe_ = false, command_since_sample_ = false;
   std::int64_t last_sample_ = -1, last_command_step_ = 0, sent_ns_ = 0;
+  std::int64_t sent_ahead_ = -1;  // event_mode: the sample send_ahead (or start-up) sent, not yet exchanged
   std::int64_t commands_applied_ = 0, stale_samples_ = 0, timeouts_ = 0, safe_steps_ = 0, longest_gap_steps_ = 0;
   std::int64_t saturated_ = 0, waits_timed_out_ = 0, safe_since_step_ = 0, last_step_ = 0;
   std::int64_t first_command_ns_ = 0, last_command_ns_ = 0;  // lockstep: the exchange's span
@@ -506,6 +536,7 @@ std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::can::Tran
                                                                opt.asc_log));
 }
 
+#ifndef EHPT_BUS_NO_LCM
 std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::lcm::LcmBus& bus, const BusPlantOptions& opt,
                                                std::string& error) {
   if (!can_run_on_bus(sc, error)) return nullptr;
@@ -516,5 +547,6 @@ std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::lcm::LcmB
   using S = msgs::EvSensors;
   return std::make_unique<BusPlant<S, LcmWire<S>>>(sc, opt, bus, opt.lcm_prefix);
 }
+#endif
 
 }  // namespace ehpt::hil

@@ -38,6 +38,11 @@ struct BusPlantOptions {
   // without one (the command then ages like a late one on a real bus)
   double lockstep_wait_s = 1.0;
   double peer_wait_s = 60.0;  // wall time to wait for an ECU to connect before t = 0
+  // lockstep whose commands come between steps (an LS-BUS FMU, targets/fmu/): start-up sends
+  // sample 0 without waiting; each later sample goes out at the end of the doStep that reached
+  // it (ExternalDriver::send_ahead) and its exchange takes what came in the Event Mode after
+  // it, without waiting (lockstep_wait_s is 0): a command that did not come is a late one
+  bool event_mode = false;
   std::string log_interface = "can0";  // the interface name in bus.log lines
   bool asc_log = false;                // CAN: bus.asc (Vector ASC) too, beside bus.log
   std::string lcm_prefix = "EHPT_";    // LCM: channels <prefix>PLANT_STATUS, <prefix>ECU_COMMAND

@@ -73,6 +73,10 @@ class ExternalDriver {
   virtual bool takes_bus_faults() const { return false; }
   // The end: its figures for a test (LinkFigures).
   virtual LinkFigures link_figures() const { return {NAN, NAN}; }
+  // Between steps, a bus plant whose commands come in an FMU's Event Mode (BusPlantOptions::
+  // event_mode): if the simulation stopped at an ECU sample step not yet sent, its sensors go
+  // out now (true); the command then comes before the next step (Simulation::exchange_now).
+  virtual bool send_ahead() { return false; }
 };
 
 struct BatchOptions {

@@ -159,6 +159,19 @@ class Runner {
     pacer_ = pacer;
     if (pacer_ != nullptr) pacer_->wait_for_step(n_);
   }
+  // Start-up, with a port whose command of a sample comes after run() returned (an LS-BUS
+  // FMU: the sample goes out at the end of the doStep that reached it, its command comes in
+  // the Event Mode that follows): the exchange at a run's last grid point is left for
+  // exchange_now() or the next run(), also at the end of the run.
+  void defer_exchange() { defer_exchange_ = true; }
+  // Between run()s: the port's exchange at the current grid point, if it has not been (once
+  // per grid point, as in the loop): its command applies and, at a sample step, the outputs
+  // at t_n follow. False without a port.
+  bool exchange_now() {
+    if (port_ == nullptr || stopped_by_fault()) return false;
+    exchange(n_);
+    return true;
+  }
 
   // Start-up only (a saved state restored: an FMU's fmi3SetFMUState): this runner takes saved's
   // state, a copy of this runner (or of one built alike) made earlier, and keeps its own links:
@@ -275,7 +288,9 @@ class Runner {
       observe(n_);
     }
     // the last grid point, a sample step: its sample goes out and its command is in (and logged)
-    if (has_port<kPaced>() && n_ == total_steps_ && awaiting_command_ && !stopped_by_fault()) exchange(n_);
+    if (has_port<kPaced>() && n_ == total_steps_ && awaiting_command_ && !stopped_by_fault() && !defer_exchange_) {
+      exchange(n_);
+    }
   }
 
   template <bool kPaced>
@@ -461,6 +476,7 @@ class Runner {
   StepPacer* pacer_;
   Port* port_ = nullptr;            // the ECU outside (attach), or none
   std::int64_t exchanged_step_ = -1;  // the last grid point the port exchanged at
+  bool defer_exchange_ = false;       // the port's command comes between run()s (defer_exchange)
   std::int64_t sensed_step_ = -1;     // the last grid point sense() read
   FaultPolicy fault_policy_;
   std::int64_t controller_ratio_, latency_steps_;

@@ -88,6 +88,11 @@ class Simulation {
   // instead of stopping at each sample. false: the vehicle is not of that family.
   virtual bool attach(EcuPort<msgs::EvSensors, msgs::EvCommand>*, StepPacer*) { return false; }
   virtual bool attach(EcuPort<msgs::PsdSensors, msgs::PsdCommand>*, StepPacer*) { return false; }
+  // With a port whose command comes between steps (an LS-BUS FMU, hil/run/runner.hpp): once,
+  // after attach, the exchange at a run's last grid point waits for exchange_now() or the next
+  // run(); exchange_now() does it (false without a port).
+  virtual void defer_exchange() {}
+  virtual bool exchange_now() { return false; }
 
   virtual const RunStats& stats() const = 0;
   virtual const MetricTotals& metrics() const = 0;

@@ -68,6 +68,9 @@ class SimulationOf final : public Simulation {
     return attach_as(port, pacer);
   }
 
+  void defer_exchange() override { runner_->defer_exchange(); }
+  bool exchange_now() override { return runner_->exchange_now(); }
+
   const RunStats& stats() const override { return runner_->stats(); }
   const MetricTotals& metrics() const override { return runner_->metrics(); }
   plant::EnergyAudit audit() const override { return plant_->audit(runner_->initial_state(), runner_->state()); }

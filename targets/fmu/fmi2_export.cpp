@@ -129,6 +129,10 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     }
     f->instance = ehpt::fmu::Instance::make(resources, fmuGUID, ehpt::fmu::Log{write_log, f}, ehpt::fmu::Fmi::k2);
     if (!f->instance) return nullptr;
+    if (f->instance->has_bus()) {  // ehpt fmu makes none: FMI-LS-BUS is FMI 3.0's (clocks, Event Mode)
+      write_log(f, fmi2Error, "logStatusError", "a CAN terminal (FMI-LS-BUS) needs FMI 3.0: this FMU is damaged");
+      return nullptr;
+    }
     return owned.release();
   } catch (const std::exception& e) {
     if (owned) write_log(owned.get(), fmi2Fatal, "logStatusFatal", e.what());
@@ -269,8 +273,8 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize, fmi2Boolean) {
   return guarded(c, [&](Fmu2& f) {
     double reached = 0.0;
-    bool stopped = false;
-    const bool done = f.instance->do_step(currentCommunicationPoint, communicationStepSize, reached, stopped);
+    bool stopped = false, event = false;  // (no bus terminal in FMI 2.0: no event)
+    const bool done = f.instance->do_step(currentCommunicationPoint, communicationStepSize, reached, stopped, event);
     f.last_successful_s = reached;
     f.terminated = stopped;
     if (!done) return fmi2Error;

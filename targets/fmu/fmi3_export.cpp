@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The FMI 3.0 co-simulation functions of an ehpt FMU (io/fmi/fmi3_api.h), each a thin map onto
 // targets/fmu/fmu_instance.hpp. Every function of the API is exported, as importers look them
-// all; what this FMU does not offer (Float32, the integer types and strings, clocks, a serialised
-// FMU state, derivatives, Event Mode, Scheduled Execution) answers fmi3Error with a message saying so.
+// all; what this FMU does not offer (Float32, the integer types and strings, a serialised FMU
+// state, derivatives, Scheduled Execution; Event Mode, Binary and Clock variables without a bus
+// terminal) answers fmi3Error with a message saying so.
 // Nothing throws across the C boundary: an exception becomes fmi3Fatal with its text.
 
 #include <cstring>
@@ -81,10 +82,6 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
     f->environment = instanceEnvironment;
     f->log_message = logMessage;
     f->logging_on = loggingOn;
-    if (eventModeUsed) {
-      write_log(f, fmi3Error, "logStatusError", "eventModeUsed = true: this FMU has no Event Mode (hasEventMode = false)");
-      return nullptr;
-    }
     if (nRequiredIntermediateVariables > 0) {
       write_log(f, fmi3Error, "logStatusError",
                 "requiredIntermediateVariables given: this FMU provides no intermediate update");
@@ -96,6 +93,16 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
     }
     f->instance = ehpt::fmu::Instance::make(resourcePath, instantiationToken, ehpt::fmu::Log{write_log, f});
     if (!f->instance) return nullptr;
+    if (eventModeUsed && !f->instance->has_bus()) {
+      write_log(f, fmi3Error, "logStatusError", "eventModeUsed = true: this FMU has no Event Mode (hasEventMode = false)");
+      return nullptr;
+    }
+    if (!eventModeUsed && f->instance->has_bus()) {
+      write_log(f, fmi3Error, "logStatusError",
+                "eventModeUsed = false: this FMU's CAN terminal (FMI-LS-BUS) exchanges its frames in Event Mode "
+                "(hasEventMode = true): instantiate it with eventModeUsed = true");
+      return nullptr;
+    }
     return owned.release();
   } catch (const std::exception& e) {
     if (f != nullptr) write_log(f, fmi3Fatal, "logStatusFatal", e.what());
@@ -116,11 +123,14 @@ fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
 }
 
 fmi3Status fmi3EnterEventMode(fmi3Instance instance) {
-  return refuse(instance, "fmi3EnterEventMode: this FMU has no Event Mode (hasEventMode = false)");
+  return guarded(instance, [&](Fmu3& f) { return ok(f.instance->enter_event_mode()); });
 }
 
 fmi3Status fmi3Terminate(fmi3Instance instance) {
-  return guarded(instance, [&](Fmu3& f) { return ok(f.instance->terminate()); });
+  return guarded(instance, [&](Fmu3& f) {
+    if (!f.instance->terminate()) return fmi3Error;
+    return f.instance->degraded() ? fmi3Warning : fmi3OK;  // a bus session without its ECU is not "OK"
+  });
 }
 
 fmi3Status fmi3Reset(fmi3Instance instance) {
@@ -173,20 +183,47 @@ EHPT_NO_VARIABLES_OF(UInt64, const)
 EHPT_NO_VARIABLES_OF(String, const)
 #undef EHPT_NO_VARIABLES_OF
 
-fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference[], size_t n, size_t[], fmi3Binary[], size_t) {
-  if (n == 0) return instance != nullptr ? fmi3OK : fmi3Error;
-  return refuse(instance, "fmi3GetBinary: this FMU has no Binary variable");
+// Binary and Clock: the CAN terminal's (--bus ls-bus); an FMU without one refuses them by name.
+fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences,
+                         size_t valueSizes[], fmi3Binary values[], size_t nValues) {
+  return guarded(instance, [&](Fmu3& f) {
+    if (nValueReferences == 0) return fmi3OK;
+    if (valueReferences == nullptr || valueSizes == nullptr || values == nullptr) return refuse(instance, "fmi3GetBinary: NULL arrays");
+    return ok(f.instance->get_binary(valueReferences, nValueReferences, valueSizes, values, nValues));
+  });
 }
-fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference[], size_t n, const size_t[], const fmi3Binary[],
-                         size_t) {
-  if (n == 0) return instance != nullptr ? fmi3OK : fmi3Error;
-  return refuse(instance, "fmi3SetBinary: this FMU has no Binary variable");
+fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences,
+                         const size_t valueSizes[], const fmi3Binary values[], size_t nValues) {
+  return guarded(instance, [&](Fmu3& f) {
+    if (nValueReferences == 0) return fmi3OK;
+    if (valueReferences == nullptr || valueSizes == nullptr || values == nullptr) return refuse(instance, "fmi3SetBinary: NULL arrays");
+    return ok(f.instance->set_binary(valueReferences, nValueReferences, valueSizes, values, nValues));
+  });
 }
-fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference[], size_t, fmi3Clock[]) {
-  return refuse(instance, "fmi3GetClock: this FMU has no clock");
+fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences,
+                        fmi3Clock values[]) {
+  return guarded(instance, [&](Fmu3& f) {
+    if (nValueReferences == 0) return fmi3OK;
+    if (valueReferences == nullptr || values == nullptr) return refuse(instance, "fmi3GetClock: NULL arrays");
+    for (size_t i = 0; i < nValueReferences; ++i) {
+      bool active = false;
+      if (!f.instance->get_clock(&valueReferences[i], 1, &active)) return fmi3Error;
+      values[i] = active ? fmi3ClockActive : fmi3ClockInactive;
+    }
+    return fmi3OK;
+  });
 }
-fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference[], size_t, const fmi3Clock[]) {
-  return refuse(instance, "fmi3SetClock: this FMU has no clock");
+fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences,
+                        const fmi3Clock values[]) {
+  return guarded(instance, [&](Fmu3& f) {
+    if (nValueReferences == 0) return fmi3OK;
+    if (valueReferences == nullptr || values == nullptr) return refuse(instance, "fmi3SetClock: NULL arrays");
+    for (size_t i = 0; i < nValueReferences; ++i) {
+      const bool active = values[i] == fmi3ClockActive;
+      if (!f.instance->set_clock(&valueReferences[i], 1, &active)) return fmi3Error;
+    }
+    return fmi3OK;
+  });
 }
 
 fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance instance, fmi3ValueReference, size_t*) {
@@ -279,12 +316,23 @@ fmi3Status fmi3SetShiftFraction(fmi3Instance instance, const fmi3ValueReference[
 fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance) {
   return refuse(instance, "fmi3EvaluateDiscreteStates: this FMU has no Event Mode");
 }
-fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean*, fmi3Boolean*, fmi3Boolean*, fmi3Boolean*,
-                                    fmi3Boolean*, fmi3Float64*) {
-  return refuse(instance, "fmi3UpdateDiscreteStates: this FMU has no Event Mode");
+fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean* discreteStatesNeedUpdate,
+                                    fmi3Boolean* terminateSimulation, fmi3Boolean* nominalsOfContinuousStatesChanged,
+                                    fmi3Boolean* valuesOfContinuousStatesChanged, fmi3Boolean* nextEventTimeDefined,
+                                    fmi3Float64* nextEventTime) {
+  return guarded(instance, [&](Fmu3& f) {
+    const bool done = f.instance->update_discrete_states();
+    // one update takes all that came: nothing left for another; the next event is a doStep's
+    for (fmi3Boolean* b : {discreteStatesNeedUpdate, terminateSimulation, nominalsOfContinuousStatesChanged,
+                           valuesOfContinuousStatesChanged, nextEventTimeDefined}) {
+      if (b != nullptr) *b = fmi3False;
+    }
+    if (nextEventTime != nullptr) *nextEventTime = 0.0;
+    return ok(done);
+  });
 }
 fmi3Status fmi3EnterStepMode(fmi3Instance instance) {
-  return refuse(instance, "fmi3EnterStepMode: this FMU has no Event Mode (Step Mode follows initialization)");
+  return guarded(instance, [&](Fmu3& f) { return ok(f.instance->enter_step_mode()); });
 }
 fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueReference[], size_t, const fmi3Int32[],
                                     fmi3Float64[], size_t) {
@@ -296,9 +344,9 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
                       fmi3Boolean* earlyReturn, fmi3Float64* lastSuccessfulTime) {
   return guarded(instance, [&](Fmu3& f) {
     double reached = 0.0;
-    bool stopped = false;
-    const bool done = f.instance->do_step(currentCommunicationPoint, communicationStepSize, reached, stopped);
-    if (eventHandlingNeeded != nullptr) *eventHandlingNeeded = fmi3False;
+    bool stopped = false, event = false;
+    const bool done = f.instance->do_step(currentCommunicationPoint, communicationStepSize, reached, stopped, event);
+    if (eventHandlingNeeded != nullptr) *eventHandlingNeeded = event ? fmi3True : fmi3False;  // Tx_Clock ticked
     if (earlyReturn != nullptr) *earlyReturn = fmi3False;
     if (terminateSimulation != nullptr) *terminateSimulation = stopped ? fmi3True : fmi3False;
     if (lastSuccessfulTime != nullptr) *lastSuccessfulTime = reached;

@@ -6,6 +6,7 @@
 
 #include "ecu/psd_ecu.hpp"
 #include "hil/run/simulation.hpp"
+#include "io/can/ls_bus.hpp"
 #include "io/junit.hpp"  // xml_escape
 #include "msgs/fields.hpp"
 
@@ -152,9 +153,37 @@ std::string unit_of(std::string_view signal_name) {
   return u != nullptr ? u->unit : "";
 }
 
-Description describe(const hil::Scenario& sc, EcuMode ecu, const std::vector<std::pair<std::string, double>>& numbers) {
+namespace {
+
+// The CAN terminal's four variables (FMI-LS-BUS §4.3: Rx_Data clocked by Rx_Clock, both inputs;
+// Tx_Data an output clocked by Tx_Clock, a triggered output clock).
+void add_bus_terminal(Description& d, std::uint32_t& vr) {
+  static const char* const names[] = {"Rx_Data", "Rx_Clock", "Tx_Data", "Tx_Clock"};
+  static const char* const what[] = {
+      "CAN frames in: FMI-LS-BUS CAN operations (CAN Transmit of the contract's frames, Bus Error, Status)",
+      "ticks when Rx_Data holds operations (triggered input clock)",
+      "CAN frames out: FMI-LS-BUS CAN operations (CAN Transmit of the contract's frames; Format Error for an operation refused)",
+      "ticks when Tx_Data holds operations, at the end of a doStep or in Event Mode (triggered output clock)"};
+  for (int m = kRxData; m <= kTxClock; ++m) {
+    Variable v;
+    v.vr = vr++;
+    v.name = std::string(kBusTerminal) + "." + names[m];
+    v.description = what[m];
+    v.causality = m == kRxData || m == kRxClock ? Causality::kInput : Causality::kOutput;
+    v.type = m == kRxData || m == kTxData ? Type::kBinary : Type::kClock;
+    v.source = Source::kBus;
+    v.index = m;
+    d.variables.push_back(v);
+  }
+}
+
+}  // namespace
+
+Description describe(const hil::Scenario& sc, EcuMode ecu, const std::vector<std::pair<std::string, double>>& numbers,
+                     Role role) {
   Description d;
   d.ecu = ecu;
+  d.role = role;
   d.psd = sc.ecu.holds<ecu::PsdEcuParams>();
   d.model_name = sc.name;
   d.description = sc.description;
@@ -168,8 +197,14 @@ Description describe(const hil::Scenario& sc, EcuMode ecu, const std::vector<std
   time.causality = Causality::kIndependent;
   time.source = Source::kTime;
   d.variables.push_back(time);
-  const std::vector<hil::SignalInfo> signals = hil::scenario_signals(sc);
   std::uint32_t vr = 1;
+  if (role == Role::kEcu) {  // the ECU alone: its terminal is all it has
+    d.model_name = sc.name + "_ecu";
+    d.description = "the built-in ECU of " + sc.name + " on an FMI-LS-BUS CAN terminal";
+    add_bus_terminal(d, vr);
+    return d;
+  }
+  const std::vector<hil::SignalInfo> signals = hil::scenario_signals(sc);
   for (std::size_t i = 0; i < signals.size(); ++i) {
     if (signals[i].name == "time_s") continue;  // FMI's independent variable
     Variable v;
@@ -181,6 +216,7 @@ Description describe(const hil::Scenario& sc, EcuMode ecu, const std::vector<std
     v.index = static_cast<int>(i);
     d.variables.push_back(v);
   }
+  if (ecu == EcuMode::kBus) add_bus_terminal(d, vr);
   if (ecu == EcuMode::kNone) {
     if (d.psd) {
       add_message_fields<msgs::PsdSensors, msgs::PsdCommand>(d, vr);
@@ -210,17 +246,38 @@ std::string model_description_3(const Description& d, const std::string& model_i
   x += "<fmiModelDescription fmiVersion=\"3.0\" modelName=\"" + xml_escape(d.model_name) + "\" instantiationToken=\"" +
        xml_escape(token) + "\" description=\"" + xml_escape(d.description) + "\" generationTool=\"" +
        xml_escape(generation_tool) + "\" variableNamingConvention=\"flat\">\n";
-  // no early return, no intermediate update, no event mode: what the SIL Kit importer accepts
+  // no early return, no intermediate update: what the SIL Kit importer accepts; Event Mode only
+  // with a bus terminal (FMI-LS-BUS needs it for its clocks), whose session a saved state
+  // does not hold
+  const bool bus = d.ecu == EcuMode::kBus;
   x += "  <CoSimulation modelIdentifier=\"" + xml_escape(model_identifier) +
        "\" canHandleVariableCommunicationStepSize=\"true\" fixedInternalStepSize=\"" + number(d.step_s) +
-       "\" canBeInstantiatedOnlyOncePerProcess=\"false\" canGetAndSetFMUState=\"true\" canSerializeFMUState=\"false\""
+       "\" canBeInstantiatedOnlyOncePerProcess=\"false\" canGetAndSetFMUState=\"" + (bus ? "false" : "true") +
+       "\" canSerializeFMUState=\"false\""
        " providesIntermediateUpdate=\"false\" mightReturnEarlyFromDoStep=\"false\""
-       " canReturnEarlyAfterIntermediateUpdate=\"false\" hasEventMode=\"false\"/>\n";
+       " canReturnEarlyAfterIntermediateUpdate=\"false\" hasEventMode=\"" + (bus ? "true" : "false") + "\"/>\n";
   x += unit_definitions(d);
   x += "  <DefaultExperiment startTime=\"0\" stopTime=\"" + number(d.stop_s) + "\" stepSize=\"" + number(d.step_s) +
        "\"/>\n";
   x += "  <ModelVariables>\n";
   for (const Variable& v : d.variables) {
+    if (v.source == Source::kBus) {
+      const std::uint32_t clock = v.vr + 1;  // Rx_Data's clock follows it, as Tx_Data's does
+      if (v.type == Type::kBinary) {
+        x += "    <Binary name=\"" + xml_escape(v.name) + "\" valueReference=\"" + std::to_string(v.vr) +
+             "\" description=\"" + xml_escape(v.description) + "\" causality=\"" +
+             (v.causality == Causality::kInput ? "input" : "output") + "\" variability=\"discrete\" clocks=\"" +
+             std::to_string(clock) + "\" mimeType=\"" + xml_escape(io::can::ls_bus::kMimeType) + "\" maxSize=\"" +
+             std::to_string(kBusBufferBytes) + "\"" +
+             (v.causality == Causality::kInput ? "><Start value=\"\"/></Binary>\n" : "/>\n");
+      } else {
+        x += "    <Clock name=\"" + xml_escape(v.name) + "\" valueReference=\"" + std::to_string(v.vr) +
+             "\" description=\"" + xml_escape(v.description) + "\" causality=\"" +
+             (v.causality == Causality::kInput ? "input" : "output") +
+             "\" variability=\"discrete\" intervalVariability=\"triggered\"/>\n";
+      }
+      continue;
+    }
     const bool boolean = v.type == Type::kBoolean;
     x += std::string("    <") + (boolean ? "Boolean" : "Float64") + " name=\"" + xml_escape(v.name) +
          "\" valueReference=\"" + std::to_string(v.vr) + "\"";
@@ -251,6 +308,28 @@ std::string model_description_3(const Description& d, const std::string& model_i
   }
   x += "  </ModelStructure>\n</fmiModelDescription>\n";
   return x;
+}
+
+std::string terminals_and_icons(const Description& d) {
+  using io::xml_escape;
+  std::string x = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<fmiTerminalsAndIcons fmiVersion=\"3.0\">\n  <Terminals>\n";
+  x += std::string("    <Terminal name=\"") + kBusTerminal +
+       "\" terminalKind=\"org.fmi-ls-bus.network-terminal\" matchingRule=\"org.fmi-ls-bus.transceiver\""
+       " description=\"CAN: the frames of ehpt's contract (extra/org.fmi-standard.fmi-ls-bus/ehpt.dbc)\">\n";
+  for (const Variable& v : d.variables) {
+    if (v.source != Source::kBus) continue;
+    x += "      <TerminalMemberVariable variableName=\"" + xml_escape(v.name) + "\" memberName=\"" +
+         xml_escape(v.name.substr(v.name.find('.') + 1)) + "\" variableKind=\"signal\"/>\n";
+  }
+  return x + "    </Terminal>\n  </Terminals>\n</fmiTerminalsAndIcons>\n";
+}
+
+std::string ls_bus_manifest() {
+  return "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+         "<fmiLayeredStandardManifest xmlns:fmi-ls=\"http://fmi-standard.org/fmi-ls-manifest\"\n"
+         "    fmi-ls:fmi-ls-name=\"org.fmi-standard.fmi-ls-bus\" fmi-ls:fmi-ls-version=\"1.0.0\"\n"
+         "    fmi-ls:fmi-ls-description=\"FMI-LS-BUS Network Abstraction (Low-Cut) for CAN\"\n"
+         "    isBusSimulationFMU=\"false\"/>\n";
 }
 
 }  // namespace ehpt::fmu

@@ -15,17 +15,28 @@
 namespace ehpt::fmu {
 
 enum class Causality { kIndependent, kOutput, kInput, kParameter };
-enum class Type { kFloat64, kBoolean };
+enum class Type { kFloat64, kBoolean, kBinary, kClock };
 // Where a variable's value comes from: the time, a plant signal (every step), a field of the
 // sensor message the ECU reads at its samples, or (an input) a field of the command message.
 // A parameter is a number of the scenario (a --set key: "vehicle.vehicle.mass_kg"), set before
 // initialization ends, when the scenario is loaded again with it (and checked as `ehpt run`
 // checks it).
-enum class Source { kTime, kSignal, kSensor, kCommand, kParameter };
+// A bus variable (--bus ls-bus) is a member of the FMU's CAN terminal (index: BusMember).
+enum class Source { kTime, kSignal, kSensor, kCommand, kParameter, kBus };
 
-// Whose ECU drives the plant: the scenario's built-in one, or the importer (--ecu none: the
-// command message's fields are inputs, the sensor message's outputs).
-enum class EcuMode { kBuiltin, kNone };
+// Whose ECU drives the plant: the scenario's built-in one, the importer (--ecu none: the
+// command message's fields are inputs, the sensor message's outputs), or an ECU on the FMU's
+// FMI-LS-BUS CAN terminal (--bus ls-bus: the frames of ehpt's contract, io/can/ehpt.dbc).
+enum class EcuMode { kBuiltin, kNone, kBus };
+
+// What the FMU is: the plant (with its ECU as EcuMode says), or (--bus ls-bus --role ecu) the
+// scenario's built-in ECU alone on a CAN terminal, as `ehpt ecu` is on a bus.
+enum class Role { kPlant, kEcu };
+
+// The members of an FMI-LS-BUS bus terminal (FMI-LS-BUS §4.3), in value-reference order.
+enum BusMember { kRxData = 0, kRxClock = 1, kTxData = 2, kTxClock = 3 };
+inline constexpr const char* kBusTerminal = "CAN";  // the terminal's name, the variables' prefix
+inline constexpr std::size_t kBusBufferBytes = 4096;  // Tx_Data and Rx_Data at most (maxSize)
 
 struct Variable {
   std::uint32_t vr = 0;      // valueReference: 0 is time; the signals from 1, then sensors, commands
@@ -42,6 +53,7 @@ struct Variable {
 
 struct Description {
   EcuMode ecu = EcuMode::kBuiltin;
+  Role role = Role::kPlant;
   bool psd = false;           // the hybrid's messages (else the EV's)
   std::string model_name;     // the scenario's name
   std::string description;    // the scenario's
@@ -53,8 +65,15 @@ struct Description {
 // ecu = kNone needs a vehicle with bus messages (hil::can_run_on_bus' rule); the caller checks.
 // numbers: hil::scenario_numbers of the scenario; those of the vehicle ("vehicle.*") become
 // parameters.
+// role = kEcu: time and the terminal only (ecu must be kBus).
 Description describe(const hil::Scenario& sc, EcuMode ecu = EcuMode::kBuiltin,
-                     const std::vector<std::pair<std::string, double>>& numbers = {});
+                     const std::vector<std::pair<std::string, double>>& numbers = {}, Role role = Role::kPlant);
+
+// With a bus terminal (ecu kBus): terminalsAndIcons/terminalsAndIcons.xml's text (FMI 3.0 §2.4.9; the
+// terminal of FMI-LS-BUS §4.3) and the layered standard's manifest (extra/org.fmi-standard.
+// fmi-ls-bus/fmi-ls-manifest.xml); FMI 3.0 only.
+std::string terminals_and_icons(const Description& d);
+std::string ls_bus_manifest();
 
 // The SI unit of a signal name's suffix (speed_m_s -> "m/s"); "" for a quantity without one
 // (soc, iceON, driverRequest).

@@ -6,6 +6,9 @@
 #include <cstring>
 #include <fstream>
 
+#include "hil/bus/bus_binding.hpp"
+#include "hil/bus/bus_ecu.hpp"
+#include "hil/bus/bus_plant.hpp"
 #include "hil/run/batch.hpp"  // fault_text
 #include "io/number_format.hpp"
 #include "msgs/fields.hpp"
@@ -14,7 +17,7 @@ namespace ehpt::fmu {
 
 namespace {
 
-constexpr int kDiscard = 2, kError = 3;
+constexpr int kWarning = 1, kDiscard = 2, kError = 3;
 // the steps one run() of the runner may take (its row buffer); a longer doStep loops
 constexpr std::int64_t kChunkSteps = 100000;
 
@@ -23,17 +26,20 @@ std::string trimmed(std::string s) {
   return s;
 }
 
-const char* type_name(Type t) { return t == Type::kBoolean ? "Boolean" : "Float64"; }
+const char* type_name(Type t) {
+  static const char* const names[] = {"Float64", "Boolean", "Binary", "Clock"};
+  return names[static_cast<int>(t)];
+}
 
 }  // namespace
 
-Instance::Instance(hil::Scenario sc, std::string scenario_path, std::vector<std::string> sets, EcuMode ecu, Log log,
-                   Fmi fmi, const std::vector<std::pair<std::string, double>>& numbers)
+Instance::Instance(hil::Scenario sc, std::string scenario_path, std::vector<std::string> sets, EcuMode ecu, Role role,
+                   Log log, Fmi fmi, const std::vector<std::pair<std::string, double>>& numbers)
     : sc_(std::move(sc)),
       scenario_path_(std::move(scenario_path)),
       sets_(std::move(sets)),
       log_(log),
-      description_(describe(sc_, ecu, numbers)),
+      description_(describe(sc_, ecu, numbers, role)),
       ecu_(ecu),
       fmi_(fmi) {
   values_.assign(description_.variables.size(), 0.0);
@@ -44,6 +50,8 @@ Instance::Instance(hil::Scenario sc, std::string scenario_path, std::vector<std:
     if (v.source == Source::kCommand) command_vrs_.emplace_back(v.vr, static_cast<std::size_t>(v.index));
   }
 }
+
+Instance::~Instance() = default;
 
 const char* Instance::name(Call c) const {
   static const char* const fmi3[] = {"fmi3EnterInitializationMode", "fmi3ExitInitializationMode", "fmi3DoStep",
@@ -67,12 +75,19 @@ std::unique_ptr<Instance> Instance::make(const std::string& resource_dir, const 
   std::string line, own_token, scenario;
   std::vector<std::string> sets;
   EcuMode ecu = EcuMode::kBuiltin;
+  Role role = Role::kPlant;
   while (std::getline(in, line)) {
     line = trimmed(line);
     if (line.rfind("token ", 0) == 0) own_token = line.substr(6);
     if (line.rfind("scenario ", 0) == 0) scenario = line.substr(9);
     if (line.rfind("set ", 0) == 0) sets.push_back(line.substr(4));
     if (line == "ecu none") ecu = EcuMode::kNone;
+    if (line == "bus ls-bus") ecu = EcuMode::kBus;
+    if (line == "role ecu") role = Role::kEcu;
+  }
+  if (role == Role::kEcu && ecu != EcuMode::kBus) {
+    log(kError, "logStatusError", manifest + ": 'role ecu' without 'bus ls-bus' (the FMU is damaged)");
+    return nullptr;
   }
   if (own_token.empty() || scenario.empty()) {
     log(kError, "logStatusError", manifest + ": no 'token' or 'scenario' line (the FMU is damaged)");
@@ -91,7 +106,7 @@ std::unique_ptr<Instance> Instance::make(const std::string& resource_dir, const 
     for (const std::string& e : errors) log(kError, "logStatusError", e);
     return nullptr;
   }
-  return std::unique_ptr<Instance>(new Instance(std::move(sc), dir + scenario, std::move(sets), ecu, log, fmi, numbers));
+  return std::unique_ptr<Instance>(new Instance(std::move(sc), dir + scenario, std::move(sets), ecu, role, log, fmi, numbers));
 }
 
 bool Instance::fail(const std::string& message) {
@@ -102,7 +117,8 @@ bool Instance::fail(const std::string& message) {
 
 bool Instance::in(State s, const char* call) {
   if (state_ == s) return true;
-  static const char* const names[] = {"Instantiated", "Initialization Mode", "Step Mode", "Terminated", "an error"};
+  static const char* const names[] = {"Instantiated", "Initialization Mode", "Step Mode", "Event Mode", "Terminated",
+                                      "an error"};
   return fail(std::string(call) + " called in " + names[static_cast<int>(state_)] + " (FMI's calling sequence)");
 }
 
@@ -188,22 +204,59 @@ bool Instance::exit_initialization() {
     changed = changed || (v.source == Source::kParameter && std::memcmp(&now, &v.start, sizeof now) != 0);
   }
   if (changed && !reload(name(Call::kExitInitialization))) return false;
+  if (description_.role == Role::kEcu) {  // the ECU alone: no plant to build
+    ecu_steps_ = sc_.solver.steps;
+    if (!make_bus(name(Call::kExitInitialization))) return false;
+    state_ = State::kEvent;  // FMI 3.0 co-simulation with eventModeUsed: Event Mode follows initialization
+    return true;
+  }
   hil::SimulationOptions opt;
   opt.columns = {0};  // the runner records time only: the FMU's outputs are read at each point
   opt.chunk_steps = kChunkSteps;
-  opt.external_ecu = ecu_ == EcuMode::kNone;
+  opt.external_ecu = ecu_ != EcuMode::kBuiltin;
   sim_ = hil::make_simulation(sc_, opt);
   if (!sim_) return fail(sc_.name + ": the simulation cannot be built");
+  if (has_bus() && !make_bus(name(Call::kExitInitialization))) return false;
   refresh_outputs();
-  state_ = State::kStep;
+  state_ = has_bus() ? State::kEvent : State::kStep;
   return true;
 }
 
-bool Instance::do_step(double current_s, double step_s, double& reached_s, bool& stopped) {
+bool Instance::make_bus(const char* call) {
+  terminal_ = std::make_unique<io::can::ls_bus::LsBusTerminal>(kBusBufferBytes);
+  tx_out_.assign(kBusBufferBytes, 0);
+  tx_out_.clear();  // its capacity stays: get_binary copies into it without allocating
+  std::string why;
+  if (description_.role == Role::kEcu) {
+    if (!hil::has_bus_ecu(sc_, why)) return fail(std::string(call) + ": " + why);
+    ecu_node_ = hil::make_can_ecu_node(sc_, *terminal_);
+    return ecu_node_ ? true : fail(std::string(call) + ": " + sc_.name + ": no built-in ECU to put on the bus");
+  }
+  std::vector<std::string> errors;
+  std::optional<hil::Binding> binding = hil::default_binding(hil::bus_family(sc_), sc_.ecu_timing.period_s, errors);
+  if (!binding) return fail(std::string(call) + ": " + (errors.empty() ? std::string("no binding") : errors.front()));
+  hil::BusPlantOptions opt;
+  opt.lockstep = true;
+  opt.event_mode = true;  // the command of a sample comes in the Event Mode after the doStep that reached it
+  opt.lockstep_wait_s = 0.0;
+  opt.peer_wait_s = 0.0;
+  opt.log_interface = "fmi-ls-bus";
+  opt.scenario_path = scenario_path_;
+  bus_plant_ = hil::make_bus_plant(sc_, *terminal_, opt, std::move(*binding), why);
+  if (!bus_plant_) return fail(std::string(call) + ": " + why);
+  bus_plant_->discard_files();  // an FMU writes no files: its figures are logged at terminate
+  bus_plant_->start(*sim_, nullptr);
+  return true;
+}
+
+bool Instance::do_step(double current_s, double step_s, double& reached_s, bool& stopped, bool& event) {
   stopped = false;
+  event = false;
   if (!in(State::kStep, name(Call::kDoStep))) return false;
   const double h = sc_.solver.step_s;
-  const double now_s = sim_->time_s();
+  const std::int64_t now = sim_ ? sim_->step_index() : ecu_step_;
+  const std::int64_t total = sim_ ? sim_->total_steps() : ecu_steps_;
+  const double now_s = sim_ ? sim_->time_s() : static_cast<double>(ecu_step_) * h;
   reached_s = now_s;
   // the importer's grid must be the plant's: whole steps, within a small tolerance
   if (!std::isfinite(current_s) || std::abs(current_s - now_s) > 1e-9 * std::max(1.0, std::abs(now_s))) {
@@ -220,10 +273,26 @@ bool Instance::do_step(double current_s, double step_s, double& reached_s, bool&
                 io::number_text(h) + " s): use a multiple of it");
   }
   const std::int64_t n = static_cast<std::int64_t>(whole);
-  if (n > sim_->total_steps() - sim_->step_index()) {
+  if (n > total - now) {
     return fail(std::string(name(Call::kDoStep)) + ": to " + io::number_text(now_s + step_s) + " s, past the stop time " + io::number_text(stop_s_) +
                 " s (" + (fmi_ == Fmi::k3 ? "stopTime of fmi3EnterInitializationMode" : "stopTime of fmi2SetupExperiment") +
                 " sets it)");
+  }
+  if (description_.role == Role::kEcu) {  // the ECU's time: it acts in Event Mode only
+    ecu_step_ += n;
+    reached_s = static_cast<double>(ecu_step_) * h;
+    return true;
+  }
+  if (has_bus()) {  // a sample's frames go out when a doStep ends on it: no doStep may pass one
+    const std::int64_t ratio = sc_.solver.ecu_ratio;
+    const std::int64_t next = (now / ratio + 1) * ratio;
+    if (now + n > next) {
+      return fail(std::string(name(Call::kDoStep)) + ": from " + io::number_text(now_s) + " s to " +
+                  io::number_text(now_s + step_s) + " s passes the ECU sample at " +
+                  io::number_text(static_cast<double>(next) * h) + " s: the bus's frames go out at communication points, "
+                  "so each ECU sample (every " + io::number_text(sc_.ecu_timing.period_s) + " s) must be one "
+                  "(a communicationStepSize that divides the ECU period)");
+    }
   }
   if (ecu_ == EcuMode::kNone) apply_inputs();  // the inputs act over this step
   std::int64_t left = n;
@@ -233,6 +302,8 @@ bool Instance::do_step(double current_s, double step_s, double& reached_s, bool&
     if (k <= 0) break;
     left -= k;
   }
+  if (bus_plant_) bus_plant_->send_ahead();  // it stopped at a sample: its frames go out now
+  event = terminal_ && !terminal_->tx().empty();
   refresh_outputs();
   reached_s = sim_->time_s();
   if (left > 0) {  // the plant stopped on a fault (FaultPolicy::kStop), as ehpt run does
@@ -263,7 +334,8 @@ bool Instance::get_values(const char* call, Type type, const std::uint32_t* vrs,
       return fail(std::string(call) + ": " + v.name + " (value reference " + std::to_string(v.vr) + ") is a " +
                   type_name(v.type) + " variable");
     }
-    const double x = v.source == Source::kTime ? (sim_ ? sim_->time_s() : 0.0) : values_[vrs[i]];
+    const double x = v.source == Source::kTime ? (sim_ ? sim_->time_s() : static_cast<double>(ecu_step_) * sc_.solver.step_s)
+                                               : values_[vrs[i]];
     if constexpr (std::is_same_v<T, bool>) {
       values[i] = x != 0.0;
     } else {
@@ -327,6 +399,10 @@ bool Instance::set_boolean(const std::uint32_t* vrs, std::size_t n, const bool* 
 }
 
 bool Instance::get_state(std::unique_ptr<SavedState>& out) {
+  if (has_bus()) {
+    return fail(std::string(name(Call::kGetState)) + ": not with a bus terminal (canGetAndSetFMUState = false): the "
+                "bus session (command timeouts, the frames' counters) is not in a saved state");
+  }
   if (state_ != State::kStep && state_ != State::kTerminated) return in(State::kStep, name(Call::kGetState));
   if (!out) out = std::make_unique<SavedState>();
   out->sim = sim_->save_state();
@@ -342,6 +418,7 @@ bool Instance::get_state(std::unique_ptr<SavedState>& out) {
 }
 
 bool Instance::set_state(const SavedState& saved) {
+  if (has_bus()) return fail(std::string(name(Call::kSetState)) + ": not with a bus terminal (canGetAndSetFMUState = false)");
   if (state_ != State::kStep && state_ != State::kTerminated) return in(State::kStep, name(Call::kSetState));
   if (!saved.sim || saved.values.size() != values_.size() || !sim_->restore_state(*saved.sim)) {
     return fail(std::string(name(Call::kSetState)) + ": not a state of this FMU");
@@ -358,13 +435,31 @@ bool Instance::set_state(const SavedState& saved) {
 
 bool Instance::terminate() {
   if (state_ == State::kTerminated) return true;  // after a plant fault ended it (Discard): the importer's terminate
-  if (state_ != State::kStep && state_ != State::kInitialization) return in(State::kStep, name(Call::kTerminate));
+  if (state_ != State::kStep && state_ != State::kEvent && state_ != State::kInitialization) {
+    return in(State::kStep, name(Call::kTerminate));
+  }
   state_ = State::kTerminated;
+  if (bus_plant_) {  // the session's figures, and why it did not do what a session must (a Warning)
+    io::JsonObject summary;
+    std::string text;
+    bus_plant_->report(summary, text);
+    while (!text.empty() && text.back() == '\n') text.pop_back();
+    log_(0, "logEvents", text);
+    for (const std::string& why : bus_plant_->degraded_reasons()) {
+      degraded_ = true;
+      log_(kWarning, "logStatusWarning", sc_.name + ": the bus session is degraded: " + why);
+    }
+  }
   return true;
 }
 
 bool Instance::reset() {
+  bus_plant_.reset();  // each refers to what follows: the driver to the simulation, both to the terminal
+  ecu_node_.reset();
   sim_.reset();
+  terminal_.reset();
+  rx_clock_ = rx_came_ = degraded_ = false;
+  ecu_step_ = 0;
   std::vector<std::string> errors;
   hil::Scenario sc;
   if (!hil::load_scenario(scenario_path_, sets_, sc, errors)) {
@@ -379,6 +474,117 @@ bool Instance::reset() {
   psd_command_ = {};
   ev_command_ = {};
   state_ = State::kInstantiated;
+  return true;
+}
+
+// --- Event Mode and the bus terminal (FMI 3.0 §3.2.x, FMI-LS-BUS §4) ---
+
+bool Instance::enter_event_mode() {
+  if (!has_bus()) return fail("fmi3EnterEventMode: this FMU has no Event Mode (hasEventMode = false)");
+  if (!in(State::kStep, "fmi3EnterEventMode")) return false;
+  state_ = State::kEvent;
+  return true;
+}
+
+bool Instance::enter_step_mode() {
+  if (!has_bus()) return fail("fmi3EnterStepMode: this FMU has no Event Mode (Step Mode follows initialization)");
+  if (!in(State::kEvent, "fmi3EnterStepMode")) return false;
+  rx_clock_ = false;  // an input clock ticks for one Event Mode
+  state_ = State::kStep;
+  return true;
+}
+
+bool Instance::update_discrete_states() {
+  if (!has_bus()) return fail("fmi3UpdateDiscreteStates: this FMU has no Event Mode");
+  if (!in(State::kEvent, "fmi3UpdateDiscreteStates")) return false;
+  if (!rx_came_) return true;
+  rx_came_ = false;
+  if (ecu_node_) {
+    ecu_node_->poll();  // each complete sample answered: its command frames in Tx_Data
+    return true;
+  }
+  // the command of the sample the plant stopped at: applied, and the outputs there with it
+  if (!sim_->finished()) sim_->exchange_now();
+  refresh_outputs();
+  return true;
+}
+
+const Variable* Instance::bus_variable(const char* call, std::uint32_t vr, Type type) {
+  if (vr >= description_.variables.size()) {
+    fail(std::string(call) + ": value reference " + std::to_string(vr) + " is not one of this FMU's");
+    return nullptr;
+  }
+  const Variable& v = description_.variables[vr];
+  if (v.type != type) {
+    fail(std::string(call) + ": " + v.name + " (value reference " + std::to_string(vr) + ") is a " + type_name(v.type) +
+         " variable" + (has_bus() ? "" : " (this FMU has no Binary or Clock variable: `ehpt fmu --bus ls-bus` gives a CAN terminal)"));
+    return nullptr;
+  }
+  return &v;
+}
+
+bool Instance::get_clock(const std::uint32_t* vrs, std::size_t n, bool* active) {
+  if (state_ == State::kError) return false;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Variable* v = bus_variable("fmi3GetClock", vrs[i], Type::kClock);
+    if (v == nullptr) return false;
+    active[i] = v->index == kTxClock ? terminal_ && !terminal_->tx().empty() : rx_clock_;
+  }
+  return true;
+}
+
+bool Instance::set_clock(const std::uint32_t* vrs, std::size_t n, const bool* active) {
+  if (state_ == State::kError) return false;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Variable* v = bus_variable("fmi3SetClock", vrs[i], Type::kClock);
+    if (v == nullptr) return false;
+    if (v->index != kRxClock) return fail("fmi3SetClock: " + v->name + " is an output clock (the FMU ticks it)");
+    if (!in(State::kEvent, "fmi3SetClock")) return false;
+    rx_clock_ = active[i];
+  }
+  return true;
+}
+
+bool Instance::get_binary(const std::uint32_t* vrs, std::size_t n, std::size_t* sizes, const std::uint8_t** values,
+                          std::size_t n_values) {
+  if (state_ == State::kError) return false;
+  if (n != n_values) return fail("fmi3GetBinary: " + std::to_string(n) + " value references but room for " + std::to_string(n_values) + " values");
+  for (std::size_t i = 0; i < n; ++i) {
+    const Variable* v = bus_variable("fmi3GetBinary", vrs[i], Type::kBinary);
+    if (v == nullptr) return false;
+    if (v->index != kTxData) return fail("fmi3GetBinary: " + v->name + " is an input");
+    if (terminal_) {  // handed over once: what the next doStep or update sends comes in the next call
+      const std::span<const std::uint8_t> tx = terminal_->tx();
+      tx_out_.assign(tx.begin(), tx.end());  // within its capacity (the terminal's): no allocation
+      terminal_->clear_tx();
+    }
+    sizes[i] = tx_out_.size();
+    values[i] = tx_out_.data();
+  }
+  return true;
+}
+
+bool Instance::set_binary(const std::uint32_t* vrs, std::size_t n, const std::size_t* sizes,
+                          const std::uint8_t* const* values, std::size_t n_values) {
+  if (state_ == State::kError) return false;
+  if (n != n_values) return fail("fmi3SetBinary: " + std::to_string(n) + " value references but " + std::to_string(n_values) + " values");
+  for (std::size_t i = 0; i < n; ++i) {
+    const Variable* v = bus_variable("fmi3SetBinary", vrs[i], Type::kBinary);
+    if (v == nullptr) return false;
+    if (v->index != kRxData) return fail("fmi3SetBinary: " + v->name + " is an output");
+    if (!in(State::kEvent, "fmi3SetBinary")) return false;
+    if (sizes[i] > kBusBufferBytes || (sizes[i] > 0 && values[i] == nullptr)) {
+      return fail("fmi3SetBinary: " + v->name + " of " + std::to_string(sizes[i]) + " bytes (maxSize " +
+                  std::to_string(kBusBufferBytes) + ")");
+    }
+    const io::can::ls_bus::RxCounts c = terminal_->take_rx({values[i], sizes[i]});
+    if (c.malformed > 0) {
+      log_(kWarning, "logStatusWarning",
+           v->name + ": " + std::to_string(c.malformed) + " operation(s) that are not FMI-LS-BUS CAN (" +
+               std::to_string(sizes[i]) + " bytes): ignored, each answered by a Format Error in Tx_Data");
+    }
+    rx_came_ = true;
+  }
   return true;
 }
 

@@ -12,6 +12,14 @@
 //   scenario <its path inside resources/>
 //   set <key=value>            (each `ehpt fmu --set`, in order)
 //   ecu none                   (--ecu none: the importer is the ECU)
+//   bus ls-bus                 (--bus ls-bus: the ECU is on the FMU's CAN terminal)
+//   role ecu                   (--role ecu: the FMU is the scenario's built-in ECU on it)
+//
+// With a bus terminal the FMU has FMI 3.0's Event Mode (FMI-LS-BUS): the plant sends a
+// sample's sensor frames (Tx_Data, Tx_Clock ticking) at the end of the doStep that reached the
+// ECU sample, and applies the command frames that come in the Event Mode after it (Rx_Data,
+// Rx_Clock), as `ehpt plant --lockstep` does over a bus (hil/bus/bus_plant.hpp), bit for bit;
+// the ECU FMU answers each complete sample in its Event Mode, as `ehpt ecu` does.
 
 #include <cstdint>
 #include <memory>
@@ -20,6 +28,7 @@
 
 #include "hil/config/config.hpp"
 #include "hil/run/simulation.hpp"
+#include "io/can/ls_bus.hpp"
 #include "msgs/ev.hpp"
 #include "msgs/psd.hpp"
 #include "targets/fmu/fmu_description.hpp"
@@ -52,8 +61,16 @@ struct SavedState {
   double stop_s = 0.0;
 };
 
+}  // namespace ehpt::fmu
+namespace ehpt::hil {
+class ExternalDriver;
+class CanEcuNode;
+}  // namespace ehpt::hil
+namespace ehpt::fmu {
+
 class Instance {
  public:
+  ~Instance();
   // nullptr if the resources do not hold a loadable scenario or the token (FMI 2: the guid) is
   // not theirs (logged).
   static std::unique_ptr<Instance> make(const std::string& resource_dir, const std::string& token, Log log,
@@ -64,8 +81,23 @@ class Instance {
   bool enter_initialization(bool stop_defined, double start_s, double stop_s);
   bool exit_initialization();
   // stopped: the plant stopped on a fault before the step's end (reached_s says where; logged;
-  // FMI: fmi3Discard with terminateSimulation), as `ehpt run` ends with exit 3
-  bool do_step(double current_s, double step_s, double& reached_s, bool& stopped);
+  // FMI: fmi3Discard with terminateSimulation), as `ehpt run` ends with exit 3. event: Tx_Data
+  // holds operations (a sample went out): the importer's Event Mode is due.
+  bool do_step(double current_s, double step_s, double& reached_s, bool& stopped, bool& event);
+  // Event Mode (a bus terminal only): entered after initialization and when the importer
+  // handles a doStep's event; update_discrete_states takes what Rx_Data brought (the plant:
+  // its command, the ECU: the samples it answers).
+  bool has_bus() const { return description_.ecu == EcuMode::kBus; }
+  bool enter_event_mode();
+  bool update_discrete_states();
+  bool enter_step_mode();
+  bool get_clock(const std::uint32_t* vrs, std::size_t n, bool* active);
+  bool set_clock(const std::uint32_t* vrs, std::size_t n, const bool* active);
+  // Tx_Data's operations, handed over once (valid until the next call); Rx_Data's taken in
+  bool get_binary(const std::uint32_t* vrs, std::size_t n, std::size_t* sizes, const std::uint8_t** values,
+                  std::size_t n_values);
+  bool set_binary(const std::uint32_t* vrs, std::size_t n, const std::size_t* sizes, const std::uint8_t* const* values,
+                  std::size_t n_values);
   bool get_float64(const std::uint32_t* vrs, std::size_t n, double* values, std::size_t n_values);
   bool get_boolean(const std::uint32_t* vrs, std::size_t n, bool* values, std::size_t n_values);
   // Inputs (--ecu none: the command's fields) before or between steps; parameters (the
@@ -75,6 +107,9 @@ class Instance {
   bool set_float64(const std::uint32_t* vrs, std::size_t n, const double* values, std::size_t n_values);
   bool set_boolean(const std::uint32_t* vrs, std::size_t n, const bool* values, std::size_t n_values);
   bool terminate();
+  // After terminate: a bus session that did not do what a session must (logged as Warnings:
+  // no ECU, commands that timed out): fmi3Terminate answers fmi3Warning.
+  bool degraded() const { return degraded_; }
   bool reset();
   // After initialization (Step Mode, or Terminated by a plant fault): the state now, into out
   // (reused if given); and back to one (of this FMU). The run then goes on bit for bit as it
@@ -85,11 +120,15 @@ class Instance {
   const Description& description() const { return description_; }
 
  private:
-  enum class State { kInstantiated, kInitialization, kStep, kTerminated, kError };
+  enum class State { kInstantiated, kInitialization, kStep, kEvent, kTerminated, kError };
   enum class Call { kEnterInitialization, kExitInitialization, kDoStep, kGetReal, kGetBoolean, kSetReal, kSetBoolean,
                     kTerminate, kReset, kGetState, kSetState };
-  Instance(hil::Scenario sc, std::string scenario_path, std::vector<std::string> sets, EcuMode ecu, Log log, Fmi fmi,
-           const std::vector<std::pair<std::string, double>>& numbers);
+  Instance(hil::Scenario sc, std::string scenario_path, std::vector<std::string> sets, EcuMode ecu, Role role, Log log,
+           Fmi fmi, const std::vector<std::pair<std::string, double>>& numbers);
+  // the bus terminal's side: the plant's bus driver or the ECU, built when initialization ends
+  bool make_bus(const char* call);
+  // the bus variable a value reference names, or fails (call's message)
+  const Variable* bus_variable(const char* call, std::uint32_t vr, Type type);
   // the scenario with the manifest's overrides, the importer's stop time and its parameters
   bool reload(const char* call);
   const char* name(Call c) const;
@@ -124,6 +163,15 @@ class Instance {
   msgs::EvSensors ev_sensors_{};
   msgs::PsdCommand psd_command_{};
   msgs::EvCommand ev_command_{};
+  // the bus terminal (ecu kBus): its Tx_Data as handed to the importer, whether Rx_Data came
+  // since the last update, the plant's bus driver (hil/bus/bus_plant.hpp) or the ECU
+  std::unique_ptr<io::can::ls_bus::LsBusTerminal> terminal_;
+  std::vector<std::uint8_t> tx_out_;
+  bool rx_clock_ = false, rx_came_ = false;
+  std::unique_ptr<hil::ExternalDriver> bus_plant_;
+  std::unique_ptr<hil::CanEcuNode> ecu_node_;
+  std::int64_t ecu_step_ = 0, ecu_steps_ = 0;  // the ECU FMU's time, in plant steps
+  bool degraded_ = false;
 };
 
 }  // namespace ehpt::fmu

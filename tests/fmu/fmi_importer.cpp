@@ -108,6 +108,11 @@ bool Fmi3Fmu::open(const std::string& fmu_path, std::string& error) {
     for (auto it = std::sregex_iterator(xml.begin(), xml.end(), boolean); it != std::sregex_iterator(); ++it) {
       boolean_vr[(*it)[1].str()] = static_cast<fmi3ValueReference>(std::stoul((*it)[2].str()));
     }
+    const std::regex bus("<(Binary|Clock) name=\"([^\"]*)\" valueReference=\"([0-9]+)\"");
+    for (auto it = std::sregex_iterator(xml.begin(), xml.end(), bus); it != std::sregex_iterator(); ++it) {
+      bus_vr[(*it)[2].str()] = static_cast<fmi3ValueReference>(std::stoul((*it)[3].str()));
+    }
+    has_event_mode = attribute(xml, "CoSimulation", "hasEventMode") == "true";
   } else {
     const std::regex var("<ScalarVariable name=\"([^\"]*)\" valueReference=\"([0-9]+)\"[^>]*causality=\"([a-z]+)\"[^>]*>"
                          "<(Real|Boolean)");
@@ -150,13 +155,156 @@ bool Fmi3Fmu::open(const std::string& fmu_path, std::string& error) {
          symbol(library_, "fmi3SetBoolean", set_boolean, error) && symbol(library_, "fmi3Terminate", terminate, error) &&
          symbol(library_, "fmi3Reset", reset, error) && symbol(library_, "fmi3GetVersion", get_version, error) &&
          symbol(library_, "fmi3GetFMUState", get_state, error) && symbol(library_, "fmi3SetFMUState", set_state, error) &&
-         symbol(library_, "fmi3FreeFMUState", free_state, error);
+         symbol(library_, "fmi3FreeFMUState", free_state, error) &&
+         symbol(library_, "fmi3EnterEventMode", enter_event_mode, error) &&
+         symbol(library_, "fmi3UpdateDiscreteStates", update_discrete_states, error) &&
+         symbol(library_, "fmi3EnterStepMode", enter_step_mode, error) && symbol(library_, "fmi3GetClock", get_clock, error) &&
+         symbol(library_, "fmi3SetClock", set_clock, error) && symbol(library_, "fmi3GetBinary", get_binary, error) &&
+         symbol(library_, "fmi3SetBinary", set_binary, error);
 }
 
-fmi3Instance Fmi3Fmu::make_instance(const char* name, const char* token_override) {
+fmi3Instance Fmi3Fmu::make_instance(const char* name, const char* token_override, bool event_mode) {
   const std::string resources = dir + "/resources/";
   return instantiate(name, token_override != nullptr ? token_override : token.c_str(), resources.c_str(), fmi3False,
-                     fmi3False, fmi3False, fmi3False, nullptr, 0, &log, collect, nullptr);
+                     fmi3False, event_mode ? fmi3True : fmi3False, fmi3False, nullptr, 0, &log, collect, nullptr);
+}
+
+namespace {
+
+struct Node {
+  Fmi3Fmu* fmu;
+  fmi3Instance instance;
+};
+
+std::string last_log(const Fmi3Fmu& fmu) { return fmu.log.empty() ? std::string() : fmu.log.back(); }
+
+// One point's Event Mode (both FMUs in it): Tx to Rx while a Tx_Clock ticks, each move followed by
+// fmi3UpdateDiscreteStates of every FMU, until a round moves nothing (at most 16 rounds).
+bool event_iteration(std::vector<Node>& nodes, BusRun& run, std::string& error) {
+  ++run.events;
+  for (int round = 0; round < 16; ++round) {
+    bool moved = false;
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      Fmi3Fmu& src = *nodes[i].fmu;
+      const fmi3ValueReference tx_clock = src.bus_vr.at("CAN.Tx_Clock"), tx_data = src.bus_vr.at("CAN.Tx_Data");
+      fmi3Clock ticked = fmi3ClockInactive;
+      if (src.get_clock(nodes[i].instance, &tx_clock, 1, &ticked) != fmi3OK) {
+        error = "fmi3GetClock(Tx_Clock): " + last_log(src);
+        return false;
+      }
+      if (ticked != fmi3ClockActive) continue;
+      size_t size = 0;
+      fmi3Binary data = nullptr;
+      if (src.get_binary(nodes[i].instance, &tx_data, 1, &size, &data, 1) != fmi3OK) {
+        error = "fmi3GetBinary(Tx_Data): " + last_log(src);
+        return false;
+      }
+      if (i == 0 && run.first_plant_tx.empty()) run.first_plant_tx.assign(data, data + size);
+      if (size == 0) continue;
+      for (std::size_t j = 0; j < nodes.size(); ++j) {  // direct connection: every other node hears it
+        if (j == i) continue;
+        Fmi3Fmu& dst = *nodes[j].fmu;
+        const fmi3ValueReference rx_clock = dst.bus_vr.at("CAN.Rx_Clock"), rx_data = dst.bus_vr.at("CAN.Rx_Data");
+        const fmi3Clock active = fmi3ClockActive;
+        if (dst.set_clock(nodes[j].instance, &rx_clock, 1, &active) != fmi3OK ||
+            dst.set_binary(nodes[j].instance, &rx_data, 1, &size, &data, 1) != fmi3OK) {
+          error = "fmi3SetClock/SetBinary(Rx): " + last_log(dst);
+          return false;
+        }
+        ++run.transfers;
+        run.bytes += static_cast<std::int64_t>(size);
+      }
+      moved = true;
+    }
+    for (Node& n : nodes) {
+      fmi3Boolean need = fmi3False, terminate = fmi3False, nominals = fmi3False, values = fmi3False, next = fmi3False;
+      fmi3Float64 next_time = 0.0;
+      if (n.fmu->update_discrete_states(n.instance, &need, &terminate, &nominals, &values, &next, &next_time) != fmi3OK) {
+        error = "fmi3UpdateDiscreteStates: " + last_log(*n.fmu);
+        return false;
+      }
+    }
+    if (!moved) return true;
+  }
+  error = "the Event Mode did not settle in 16 rounds";
+  return false;
+}
+
+}  // namespace
+
+bool run_bus_pair(Fmi3Fmu& a, fmi3Instance ia, Fmi3Fmu* b, fmi3Instance ib, std::int64_t k, double stop_s,
+                  std::vector<std::vector<double>>& rows, BusRun& run, std::string& error) {
+  rows.clear();
+  std::vector<Node> nodes{{&a, ia}};
+  if (b != nullptr) nodes.push_back({b, ib});
+  for (Node& n : nodes) {
+    if (n.fmu->enter_initialization(n.instance, fmi3False, 0.0, 0.0, fmi3True, stop_s) != fmi3OK ||
+        n.fmu->exit_initialization(n.instance) != fmi3OK) {
+      error = "initialization failed: " + last_log(*n.fmu);
+      return false;
+    }
+  }
+  // FMI 3.0 co-simulation with eventModeUsed: Event Mode follows initialization (sample 0)
+  if (!event_iteration(nodes, run, error)) return false;
+  for (Node& n : nodes) {
+    if (n.fmu->enter_step_mode(n.instance) != fmi3OK) {
+      error = "fmi3EnterStepMode: " + last_log(*n.fmu);
+      return false;
+    }
+  }
+  std::vector<fmi3ValueReference> refs;
+  for (const std::string& name : a.output_names) refs.push_back(a.vr.at(name));
+  std::vector<double> y(refs.size());
+  const std::int64_t total = std::llround(stop_s / a.step_s);
+  for (std::int64_t done = 0; done < total; done += k) {
+    const double t = static_cast<double>(done) * a.step_s;
+    const std::int64_t n = std::min(k, total - done);
+    bool any_event = false;
+    for (Node& node : nodes) {
+      fmi3Boolean event = fmi3False, terminate = fmi3False, early = fmi3False;
+      fmi3Float64 last = 0.0;
+      if (node.fmu->do_step(node.instance, t, static_cast<double>(n) * a.step_s, fmi3True, &event, &terminate, &early,
+                            &last) != fmi3OK) {
+        error = "doStep at t = " + std::to_string(t) + " failed: " + last_log(*node.fmu);
+        return false;
+      }
+      any_event = any_event || event == fmi3True;
+    }
+    if (any_event) {
+      for (Node& node : nodes) {
+        if (node.fmu->enter_event_mode(node.instance) != fmi3OK) {
+          error = "fmi3EnterEventMode: " + last_log(*node.fmu);
+          return false;
+        }
+      }
+      if (!event_iteration(nodes, run, error)) return false;
+      for (Node& node : nodes) {
+        if (node.fmu->enter_step_mode(node.instance) != fmi3OK) {
+          error = "fmi3EnterStepMode: " + last_log(*node.fmu);
+          return false;
+        }
+      }
+    }
+    double time = 0.0;
+    const fmi3ValueReference time_vr = 0;
+    if (a.get_float64(ia, &time_vr, 1, &time, 1) != fmi3OK || a.get_float64(ia, refs.data(), refs.size(), y.data(), y.size()) != fmi3OK) {
+      error = "getFloat64 failed: " + last_log(a);
+      return false;
+    }
+    std::vector<double> row{time};
+    row.insert(row.end(), y.begin(), y.end());
+    rows.push_back(std::move(row));
+  }
+  run.terminate_status = a.terminate(ia);
+  if (b != nullptr && b->terminate(ib) != fmi3OK) {
+    error = "the ECU's fmi3Terminate: " + last_log(*b);
+    return false;
+  }
+  if (run.terminate_status != fmi3OK && run.terminate_status != fmi3Warning) {
+    error = "fmi3Terminate: " + last_log(a);
+    return false;
+  }
+  return true;
 }
 
 fmi2Component Fmi3Fmu::make_instance2(const char* name, const char* guid_override) {

@@ -54,6 +54,16 @@ class Fmi3Fmu {
   fmi3GetFMUStateTYPE* get_state = nullptr;
   fmi3SetFMUStateTYPE* set_state = nullptr;
   fmi3FreeFMUStateTYPE* free_state = nullptr;
+  // Event Mode and the bus terminal (FMI-LS-BUS): an FMU with hasEventMode = "true"
+  fmi3EnterEventModeTYPE* enter_event_mode = nullptr;
+  fmi3UpdateDiscreteStatesTYPE* update_discrete_states = nullptr;
+  fmi3EnterStepModeTYPE* enter_step_mode = nullptr;
+  fmi3GetClockTYPE* get_clock = nullptr;
+  fmi3SetClockTYPE* set_clock = nullptr;
+  fmi3GetBinaryTYPE* get_binary = nullptr;
+  fmi3SetBinaryTYPE* set_binary = nullptr;
+  bool has_event_mode = false;                   // CoSimulation hasEventMode
+  std::map<std::string, fmi3ValueReference> bus_vr;  // Binary and Clock variables by name (CAN.Tx_Data, ...)
 
   // FMI 2.0
   fmi2InstantiateTYPE* instantiate2 = nullptr;
@@ -76,7 +86,7 @@ class Fmi3Fmu {
   fmi2Component make_instance2(const char* name, const char* guid_override = nullptr);
 
   // instantiate with this FMU's token and resources, the log callback collecting into `log`
-  fmi3Instance make_instance(const char* name, const char* token_override = nullptr);
+  fmi3Instance make_instance(const char* name, const char* token_override = nullptr, bool event_mode = false);
 
  private:
   void* library_ = nullptr;
@@ -87,6 +97,19 @@ class Fmi3Fmu {
 // (output_names order) after each step, preceded by the time. false and why on any non-OK.
 bool run_fmu(Fmi3Fmu& fmu, fmi3Instance instance, std::int64_t k, double stop_s, std::vector<std::vector<double>>& rows,
              std::string& error);
+// Two FMI-LS-BUS FMUs connected directly (FMI-LS-BUS §2.2.2 "direct communication"): each
+// one's CAN.Tx_Data to the other's CAN.Rx_Data, Rx_Clock ticking with it, at every point where
+// a Tx_Clock ticked, in Event Mode until nothing moves; both stepped by k plant steps. rows: the
+// plant's outputs after each point's Event Mode (time first). a: the plant, b: its ECU (nullptr:
+// none, the plant alone on its bus). Counts what moved; false and why on an error status
+// (terminate's fmi3Warning is returned in terminate_status, not an error).
+struct BusRun {
+  std::int64_t events = 0, transfers = 0, bytes = 0;
+  fmi3Status terminate_status = fmi3OK;
+  std::vector<std::uint8_t> first_plant_tx;  // the plant's first Tx_Data (sample 0)
+};
+bool run_bus_pair(Fmi3Fmu& a, fmi3Instance ia, Fmi3Fmu* b, fmi3Instance ib, std::int64_t k, double stop_s,
+                  std::vector<std::vector<double>>& rows, BusRun& run, std::string& error);
 // The same through FMI 2.0 (the time is the importer's own communication point).
 bool run_fmu2(Fmi3Fmu& fmu, fmi2Component instance, std::int64_t k, double stop_s, std::vector<std::vector<double>>& rows,
               std::string& error);

@@ -14,6 +14,11 @@ For every shipped scenario (every vehicle kind): `ehpt fmu` (2 s, FMI 3.0 and FM
   timeseries.csv (output.interval_s = 10 steps), character for character;
 - FMI 2.0: what it requires (one type element per ScalarVariable, value references unique per
   type, Outputs and InitialUnknowns by 1-based index, inputs with start), and the same rows.
+--bus ls-bus: the plant FMU and the ECU FMU (FMI-LS-BUS CAN terminals) are complete FMI 3.0
+(Binary inputs with a Start, each clocked variable's clock a Clock, the MIME type, Event Mode,
+terminalsAndIcons.xml naming the four members, the layered standard's manifest, the DBC), and
+fmu_run connecting them Tx_Data to Rx_Data prints the rows of a real lockstep session over
+socketcand (`ehpt plant --lockstep` + `ehpt ecu`), character for character.
 With `clean`: one FMU run where nothing of ehpt is reachable: a mount namespace with an empty
 tmpfs over the source (and build) tree and over an installed /usr/share/ehpt, and the system's
 libtomlplusplus.so.3 hidden (the FMU's library has toml++ compiled in); the rows are again
@@ -22,9 +27,11 @@ ehpt run's.
 """
 import os
 import shutil
+import socket
 import subprocess
 import sys
 import tempfile
+import time
 import xml.etree.ElementTree as ET
 import zipfile
 
@@ -119,8 +126,18 @@ def model_description_problems(fmu):
             problems.append("%s: unit %s not declared" % (v.get("name"), v.get("unit")))
         if v.get("causality") == "independent" and (v.get("variability") != "continuous" or v.get("start")):
             problems.append("the independent variable must be continuous without start")
-        if v.get("causality") == "input" and v.get("start") is None:
+        if v.get("causality") == "input" and v.tag not in ("Binary", "Clock") and v.get("start") is None:
             problems.append("%s: an input needs a start value" % v.get("name"))
+        if v.tag == "Binary" and v.get("causality") == "input" and v.find("Start") is None:
+            problems.append("%s: a Binary input needs a <Start>" % v.get("name"))
+        if v.tag == "Clock" and (v.get("variability") != "discrete" or
+                                 v.get("intervalVariability") not in ("constant", "fixed", "tunable", "changing",
+                                                                      "countdown", "triggered")):
+            problems.append("%s: a Clock is discrete with an intervalVariability" % v.get("name"))
+        if v.get("clocks"):
+            clocks = {c.get("valueReference") for c in variables if c.tag == "Clock"}
+            if any(c not in clocks for c in v.get("clocks").split()):
+                problems.append("%s: clocks %s are not Clock variables" % (v.get("name"), v.get("clocks")))
         if v.tag == "Boolean" and (v.get("unit") or v.get("variability") == "continuous"):
             problems.append("%s: a Boolean has no unit and is not continuous" % v.get("name"))
     outputs = [v.get("valueReference") for v in variables if v.get("causality") == "output"]
@@ -251,6 +268,116 @@ with tempfile.TemporaryDirectory() as tmp:
                   % (r.returncode, r.stderr[-400:]))
         finally:
             shutil.rmtree(box)
+
+def ls_bus_problems(fmu):
+    """What FMI-LS-BUS asks of a Low-Cut CAN FMU beyond FMI 3.0."""
+    problems, _ = model_description_problems(fmu)
+    with zipfile.ZipFile(fmu) as z:
+        root = ET.fromstring(z.read("modelDescription.xml"))
+        names = set(z.namelist())
+        terminals = ET.fromstring(z.read("terminalsAndIcons/terminalsAndIcons.xml")) \
+            if "terminalsAndIcons/terminalsAndIcons.xml" in names else None
+    if root.find("CoSimulation").get("hasEventMode") != "true":
+        problems.append("hasEventMode must be true")
+    bus = {v.get("name"): v for v in root.find("ModelVariables") if v.tag in ("Binary", "Clock")}
+    want = {"CAN.Rx_Data": ("Binary", "input"), "CAN.Rx_Clock": ("Clock", "input"),
+            "CAN.Tx_Data": ("Binary", "output"), "CAN.Tx_Clock": ("Clock", "output")}
+    for name, (tag, causality) in want.items():
+        v = bus.get(name)
+        if v is None or v.tag != tag or v.get("causality") != causality:
+            problems.append("%s: a %s %s" % (name, causality, tag))
+        elif tag == "Clock" and v.get("intervalVariability") != "triggered":
+            problems.append("%s: triggered" % name)
+        elif tag == "Binary" and not v.get("mimeType", "").startswith("application/org.fmi-standard.fmi-ls-bus.can"):
+            problems.append("%s: the LS-BUS CAN MIME type" % name)
+    if len(bus) == 4 and bus["CAN.Rx_Data"].get("clocks") != bus["CAN.Rx_Clock"].get("valueReference"):
+        problems.append("Rx_Data is clocked by Rx_Clock")
+    if len(bus) == 4 and bus["CAN.Tx_Data"].get("clocks") != bus["CAN.Tx_Clock"].get("valueReference"):
+        problems.append("Tx_Data is clocked by Tx_Clock")
+    if terminals is None:
+        problems.append("no terminalsAndIcons/terminalsAndIcons.xml")
+    else:
+        t = terminals.find("Terminals/Terminal")
+        members = {m.get("memberName"): m.get("variableName") for m in t.iter("TerminalMemberVariable")} if t is not None else {}
+        if t is None or t.get("terminalKind") != "org.fmi-ls-bus.network-terminal" or \
+                t.get("matchingRule") != "org.fmi-ls-bus.transceiver" or \
+                members != {m: "CAN." + m for m in ("Rx_Data", "Rx_Clock", "Tx_Data", "Tx_Clock")}:
+            problems.append("the terminal: kind, matching rule, the four members %s" % members)
+    for f in ("extra/org.fmi-standard.fmi-ls-bus/fmi-ls-manifest.xml", "extra/org.fmi-standard.fmi-ls-bus/ehpt.dbc"):
+        if f not in names:
+            problems.append("no " + f)
+    return problems
+
+
+def wait_listening(port, proc, timeout_s=20.0):
+    deadline = time.time() + timeout_s
+    while time.time() < deadline and proc.poll() is None:
+        try:
+            with socket.create_connection(("127.0.0.1", port), timeout=0.2):
+                return True
+        except OSError:
+            time.sleep(0.05)
+    return False
+
+
+with tempfile.TemporaryDirectory() as tmp:
+    # --bus ls-bus: the plant and its ECU as two FMUs on one CAN bus, against a socketcand session
+    dur = "solver.duration_s=12"  # NEDC's first acceleration (from 11 s): the ECU's commands move the car
+    plant_fmu, ecu_fmu = os.path.join(tmp, "plant.fmu"), os.path.join(tmp, "ecu.fmu")
+    r1 = ehpt("fmu", "psecu2_nedc", "--bus", "ls-bus", "--set", dur, "--out", plant_fmu)
+    r2 = ehpt("fmu", "psecu2_nedc", "--bus", "ls-bus", "--role", "ecu", "--set", dur, "--out", ecu_fmu)
+    check(r1.returncode == 0 and r2.returncode == 0, "ehpt fmu --bus ls-bus: the plant and the ECU (%d, %d) %s"
+          % (r1.returncode, r2.returncode, (r1.stderr + r2.stderr)[-300:]))
+    if r1.returncode == 0 and r2.returncode == 0:
+        for fmu in (plant_fmu, ecu_fmu):
+            with zipfile.ZipFile(fmu) as z:
+                for member in ("modelDescription.xml", "terminalsAndIcons/terminalsAndIcons.xml",
+                               "extra/org.fmi-standard.fmi-ls-bus/fmi-ls-manifest.xml"):
+                    path = os.path.join(tmp, "lint.xml")
+                    with open(path, "wb") as f:
+                        f.write(z.read(member))
+                    lint = subprocess.run(["xmllint", "--noout", path], capture_output=True, text=True)
+                    check(lint.returncode == 0, "%s: %s well formed %s" % (os.path.basename(fmu), member, lint.stderr[-200:]))
+            problems = ls_bus_problems(fmu)
+            check(not problems, "%s: FMI 3.0 and FMI-LS-BUS complete %s" % (os.path.basename(fmu), problems))
+        with socket.socket() as s:
+            s.bind(("127.0.0.1", 0))
+            port = s.getsockname()[1]
+        session = os.path.join(tmp, "session")
+        bus = "socketcand:127.0.0.1:%d" % port
+        with open(os.path.join(tmp, "plant.log"), "w") as plog, open(os.path.join(tmp, "ecu.log"), "w") as elog:
+            plant = subprocess.Popen([EHPT, "plant", "psecu2_nedc", "--bus", bus, "--lockstep", "--quiet", "--out", session,
+                                      "--set", dur, "--set", "output.interval_s=0.01"], stdout=plog, stderr=plog)
+            listening = wait_listening(port, plant)
+            ecu = subprocess.Popen([EHPT, "ecu", "psecu2_nedc", "--bus", bus], stdout=elog, stderr=elog)
+            plant_rc, ecu_rc = plant.wait(timeout=300), ecu.wait(timeout=300)
+        with open(os.path.join(tmp, "plant.log")) as f:
+            plant_text = f.read()
+        check(listening and plant_rc == 0 and ecu_rc == 0, "the lockstep socketcand session (%d, %d): %s"
+              % (plant_rc, ecu_rc, plant_text[-300:]))
+        lines = open(os.path.join(session, "timeseries.csv")).read().splitlines() if plant_rc == 0 else []
+        want = [lines[0]] + lines[2:] if lines else None  # the header, then every sample after t = 0
+        got = subprocess.run([FMU_RUN, plant_fmu, "10", "12", ecu_fmu], capture_output=True, text=True, timeout=300)
+        rows = project(got.stdout.splitlines(), want[0].split(",") if want else [])
+        first = next((i for i, (a, b) in enumerate(zip(rows, want or [])) if a != b), None)
+        check(got.returncode == 0 and want is not None and rows == want and len(rows) == 1201,
+              "plant FMU + ECU FMU, Tx_Data to Rx_Data: the socketcand lockstep session's rows (%d of %d)%s %s"
+              % (len(rows), len(want or []), "" if first is None else " first difference at row %d: %s | %s" % (
+                  first, rows[first][:100], want[first][:100]), got.stderr[-300:]))
+        check("1201 event modes, 2402 transfers" in got.stderr and "fmi3Terminate OK" in got.stderr,
+              "every sample crossed the bus both ways, the session OK: %s" % got.stderr.strip()[-200:])
+        alone = subprocess.run([FMU_RUN, plant_fmu, "10", "12"], capture_output=True, text=True, timeout=300)
+        check(alone.returncode == 0 and "fmi3Terminate Warning" in alone.stderr and "no ECU" in alone.stderr,
+              "the plant FMU without its ECU: fmi3Terminate is a Warning that says no ECU: %s" % alone.stderr.strip()[-300:])
+    r = ehpt("fmu", "psecu2_nedc", "--bus", "ls-bus", "--fmi", "2", "--out", os.path.join(tmp, "two.fmu"))
+    check(r.returncode == 2 and "FMI 3.0" in r.stderr and not os.path.exists(os.path.join(tmp, "two.fmu")),
+          "--bus ls-bus --fmi 2: exit 2, why, nothing written (%d): %s" % (r.returncode, r.stderr.strip()))
+    r = ehpt("fmu", "battery_cc_discharge", "--bus", "ls-bus", "--out", os.path.join(tmp, "rigbus.fmu"))
+    check(r.returncode == 2 and "has no bus messages" in r.stderr, "--bus ls-bus on a rig: exit 2, why (%d): %s"
+          % (r.returncode, r.stderr.strip()))
+    r = ehpt("fmu", "psecu2_nedc", "--role", "ecu", "--out", os.path.join(tmp, "ecu_nobus.fmu"))
+    check(r.returncode == 2 and "--bus ls-bus" in r.stderr, "--role ecu without --bus: exit 2, why (%d): %s"
+          % (r.returncode, r.stderr.strip()))
 
 print("ok" if not failures else "%d check(s) failed" % len(failures))
 sys.exit(1 if failures else 0)
