@@ -246,6 +246,7 @@ bool Instance::make_bus(const char* call) {
   if (!bus_plant_) return fail(std::string(call) + ": " + why);
   bus_plant_->discard_files();  // an FMU writes no files: its figures are logged at terminate
   bus_plant_->start(*sim_, nullptr);
+  if (!bus_plant_->flush(why)) return fail(std::string(call) + ": " + why);  // e.g. the plant not on its port
   return true;
 }
 
