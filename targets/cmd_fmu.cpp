@@ -12,6 +12,8 @@
 #include "hil/bus/bus_binding.hpp"  // builtin_ehpt_dbc: the LS-BUS FMU's contract
 #include "hil/bus/bus_ecu.hpp"      // has_bus_ecu: --role ecu
 #include "hil/bus/bus_plant.hpp"    // can_run_on_bus: --ecu none has the bus's rule
+#include "hil/bus/in_process_bus.hpp"  // has_bus_faults
+#include "io/can/ls_bus.hpp"
 #include "hil/config/config.hpp"
 #include "hil/diag/provenance.hpp"
 #include "io/junit.hpp"
@@ -33,7 +35,7 @@ namespace {
 
 const char* kFmuHelp =
     "usage: ehpt fmu SCENARIO [--fmi 3|2] [--ecu builtin|none] [--out FILE.fmu]\n"
-    "                [--set key=value ...] [--variables]\n"
+    "                [--set key=value ...] [--fault SPEC ...] [--variables]\n"
     "       ehpt fmu SCENARIO --bus ls-bus [--role plant|ecu] [--out FILE.fmu] ...\n"
     "\n"
     "Builds an FMI 3.0 (or 2.0) co-simulation FMU of the scenario for x86_64-linux: its\n"
@@ -61,8 +63,28 @@ const char* kFmuHelp =
     "  --out FILE.fmu   where to write it (default out/<scenario name>.fmu); never over an\n"
     "                   existing file\n"
     "  --set key=value  as for 'ehpt run': the FMU's scenario is the one with these overrides\n"
+    "  --fault SPEC     as for 'ehpt run', repeatable: a fault acting in the FMU. Faults on\n"
+    "                   CAN frames (drop, delay, error_frames, bus_off, ...) need the bus:\n"
+    "                   --bus ls-bus\n"
     "  --variables      print the FMU's variables (a Markdown table: value reference, name,\n"
     "                   causality, unit, start, description) and write nothing\n";
+
+// Whether the scenario's bus faults fit the LS-BUS plant (ehpt's contract, a terminal that
+// carries Bus Error and Status): the plant the FMU will make, made once here and dropped.
+bool bus_faults_fit(const hil::Scenario& sc, std::string& why) {
+  if (!hil::has_bus_faults(sc)) return true;
+  std::vector<std::string> errors;
+  std::optional<hil::Binding> binding = hil::default_binding(hil::bus_family(sc), sc.ecu_timing.period_s, errors);
+  if (!binding) {
+    why = errors.empty() ? "no binding" : errors.front();
+    return false;
+  }
+  io::can::ls_bus::LsBusTerminal terminal;
+  hil::BusPlantOptions opt;
+  opt.lockstep = true;
+  opt.event_mode = true;
+  return hil::make_bus_plant(sc, terminal, opt, std::move(*binding), why) != nullptr;
+}
 
 // A C identifier from the scenario's name: modelIdentifier, the library's file name.
 std::string identifier_of(const std::string& name) {
@@ -148,10 +170,10 @@ int cmd_fmu(const std::vector<std::string>& args) {
   std::string scenario, out_path, fmi = "3", ecu = "builtin", bus, role = "plant";
   bool ecu_given = false;
   bool list_variables = false;
-  std::vector<std::string> sets;
+  std::vector<std::string> sets, faults;
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
-    if ((a == "--out" || a == "--set" || a == "--fmi" || a == "--ecu" || a == "--bus" || a == "--role") &&
+    if ((a == "--out" || a == "--set" || a == "--fault" || a == "--fmi" || a == "--ecu" || a == "--bus" || a == "--role") &&
         i + 1 >= args.size()) {
       std::cerr << a << " needs a value\n" << kFmuHelp;
       return 1;
@@ -160,6 +182,8 @@ int cmd_fmu(const std::vector<std::string>& args) {
       out_path = args[++i];
     } else if (a == "--set") {
       sets.push_back(args[++i]);
+    } else if (a == "--fault") {
+      faults.push_back(args[++i]);
     } else if (a == "--fmi") {
       fmi = args[++i];
     } else if (a == "--ecu") {
@@ -215,7 +239,21 @@ int cmd_fmu(const std::vector<std::string>& args) {
   const fmu::EcuMode mode = !bus.empty() ? fmu::EcuMode::kBus : ecu == "none" ? fmu::EcuMode::kNone : fmu::EcuMode::kBuiltin;
   const fmu::Role fmu_role = role == "ecu" ? fmu::Role::kEcu : fmu::Role::kPlant;
   hil::Scenario sc;
-  if (const int rc = load(scenario, sets, sc); rc != 0) return rc;
+  if (role == "ecu" && !faults.empty()) {
+    std::cerr << "--fault with --role ecu: faults act in the plant; give them to the plant's FMU\n";
+    return 2;
+  }
+  if (const int rc = load(scenario, sets, sc, faults); rc != 0) return rc;
+  if (mode != fmu::EcuMode::kBus && hil::has_bus_faults(sc)) {
+    std::cerr << "error: " << sc.name << " has faults on CAN frames (drop, delay, error_frames, ...): they need a bus, "
+              << "which this FMU has not (its ECU is " << (mode == fmu::EcuMode::kNone ? "the importer" : "built in")
+              << "): make it with --bus ls-bus (the ECU on its CAN terminal), or run it with 'ehpt run'\n";
+    return 2;
+  }
+  if (std::string why; mode == fmu::EcuMode::kBus && fmu_role == fmu::Role::kPlant && !bus_faults_fit(sc, why)) {
+    std::cerr << "error: --bus ls-bus: " << why << "\n";
+    return 2;
+  }
   if (std::string why; mode == fmu::EcuMode::kBus && !hil::can_run_on_bus(sc, why)) {
     std::cerr << "error: --bus ls-bus: " << why << "\n";
     return 2;
@@ -229,10 +267,12 @@ int cmd_fmu(const std::vector<std::string>& args) {
     std::cerr << "error: --ecu none: " << why << "\n";
     return 2;
   }
-  for (const std::string& s : sets) {
-    if (s.find('\n') != std::string::npos || s.find('\r') != std::string::npos) {
-      std::cerr << "--set: a line break in '" << s << "' cannot go into the FMU's manifest\n";
-      return 2;
+  for (const auto& [option, values] : {std::pair{"--set", &sets}, std::pair{"--fault", &faults}}) {
+    for (const std::string& s : *values) {
+      if (s.find('\n') != std::string::npos || s.find('\r') != std::string::npos) {
+        std::cerr << option << ": a line break in '" << s << "' cannot go into the FMU's manifest\n";
+        return 2;
+      }
     }
   }
   if (list_variables) {
@@ -308,10 +348,12 @@ int cmd_fmu(const std::vector<std::string>& args) {
   std::string digest_input;
   for (const io::ZipEntry& e : entries) digest_input += e.name + '\0' + io::sha256_hex(e.data) + '\n';
   for (const std::string& s : sets) digest_input += "set " + s + '\n';
+  for (const std::string& f : faults) digest_input += "fault " + f + '\n';
   digest_input += "ecu " + ecu + "\nfmi " + fmi + "\nbus " + bus + "\nrole " + role + '\n';
   const std::string token = "{" + io::sha256_hex(digest_input).substr(0, 32) + "}";
   std::string manifest = "# ehpt fmu 1\ntoken " + token + "\nscenario " + scenario_rel + "\n";
   for (const std::string& s : sets) manifest += "set " + s + "\n";
+  for (const std::string& f : faults) manifest += "fault " + f + "\n";
   if (mode == fmu::EcuMode::kNone) manifest += "ecu none\n";
   if (mode == fmu::EcuMode::kBus) manifest += "bus ls-bus\n";
   if (fmu_role == fmu::Role::kEcu) manifest += "role ecu\n";

@@ -6,6 +6,7 @@
 // boundary: an exception becomes fmi2Fatal with its text.
 
 #include <cstdlib>
+#include <cstring>
 #include <exception>
 #include <memory>
 #include <string>
@@ -248,14 +249,42 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* FMUstate) {
   }
   return fmi2OK;
 }
-fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate, size_t*) {
-  return refuse(c, "fmi2SerializedFMUstateSize: not provided (canSerializeFMUstate = false)");
+// A serialised state is the way to the point (targets/fmu/fmu_instance.hpp: SavedState), as text.
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t* size) {
+  return guarded(c, [&](Fmu2& f) {
+    if (FMUstate == nullptr || size == nullptr) return refuse(c, "fmi2SerializedFMUstateSize: NULL arguments");
+    auto& state = *static_cast<ehpt::fmu::SavedState*>(FMUstate);
+    if (!f.instance->serialize(state)) return fmi2Error;
+    *size = state.bytes.size();
+    return fmi2OK;
+  });
 }
-fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate, fmi2Byte[], size_t) {
-  return refuse(c, "fmi2SerializeFMUstate: not provided (canSerializeFMUstate = false)");
+fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size) {
+  return guarded(c, [&](Fmu2& f) {
+    if (FMUstate == nullptr || serializedState == nullptr) return refuse(c, "fmi2SerializeFMUstate: NULL arguments");
+    auto& state = *static_cast<ehpt::fmu::SavedState*>(FMUstate);
+    if (!f.instance->serialize(state)) return fmi2Error;
+    if (size < state.bytes.size()) {
+      return refuse(c, ("fmi2SerializeFMUstate: size " + std::to_string(size) + " but the state is " +
+                        std::to_string(state.bytes.size()) + " bytes (fmi2SerializedFMUstateSize)")
+                           .c_str());
+    }
+    std::memcpy(serializedState, state.bytes.data(), state.bytes.size());
+    return fmi2OK;
+  });
 }
-fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte[], size_t, fmi2FMUstate*) {
-  return refuse(c, "fmi2DeSerializeFMUstate: not provided (canSerializeFMUstate = false)");
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size, fmi2FMUstate* FMUstate) {
+  return guarded(c, [&](Fmu2& f) {
+    if (FMUstate == nullptr) return refuse(c, "fmi2DeSerializeFMUstate: FMUstate is NULL");
+    std::unique_ptr<ehpt::fmu::SavedState> state;
+    if (!f.instance->deserialize(reinterpret_cast<const std::uint8_t*>(serializedState), size, state)) return fmi2Error;
+    if (*FMUstate != nullptr) {
+      *static_cast<ehpt::fmu::SavedState*>(*FMUstate) = std::move(*state);
+    } else {
+      *FMUstate = state.release();
+    }
+    return fmi2OK;
+  });
 }
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference[], size_t, const fmi2ValueReference[],
                                         size_t, const fmi2Real[], fmi2Real[]) {

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The FMI 3.0 co-simulation functions of an ehpt FMU (io/fmi/fmi3_api.h), each a thin map onto
 // targets/fmu/fmu_instance.hpp. Every function of the API is exported, as importers look them
-// all; what this FMU does not offer (Float32, the integer types and strings, a serialised FMU
-// state, derivatives, Scheduled Execution; Event Mode, Binary and Clock variables without a bus
-// terminal) answers fmi3Error with a message saying so.
+// all; what this FMU does not offer (Float32, the integer types and strings, derivatives,
+// Scheduled Execution; Event Mode, Binary and Clock variables without a bus terminal; a
+// serialised state without the built-in ECU) answers fmi3Error with a message saying so.
 // Nothing throws across the C boundary: an exception becomes fmi3Fatal with its text.
 
 #include <cstring>
@@ -258,14 +258,43 @@ fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState* FMUState) {
   }
   return fmi3OK;
 }
-fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState, size_t*) {
-  return refuse(instance, "fmi3SerializedFMUStateSize: not provided (canSerializeFMUState = false)");
+// A serialised state is the way to the point (targets/fmu/fmu_instance.hpp: SavedState), as text.
+fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState FMUState, size_t* size) {
+  return guarded(instance, [&](Fmu3& f) {
+    if (FMUState == nullptr || size == nullptr) return refuse(instance, "fmi3SerializedFMUStateSize: NULL arguments");
+    auto& state = *static_cast<ehpt::fmu::SavedState*>(FMUState);
+    if (!f.instance->serialize(state)) return fmi3Error;
+    *size = state.bytes.size();
+    return fmi3OK;
+  });
 }
-fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState, fmi3Byte[], size_t) {
-  return refuse(instance, "fmi3SerializeFMUState: not provided (canSerializeFMUState = false)");
+fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState, fmi3Byte serializedState[], size_t size) {
+  return guarded(instance, [&](Fmu3& f) {
+    if (FMUState == nullptr || serializedState == nullptr) return refuse(instance, "fmi3SerializeFMUState: NULL arguments");
+    auto& state = *static_cast<ehpt::fmu::SavedState*>(FMUState);
+    if (!f.instance->serialize(state)) return fmi3Error;
+    if (size < state.bytes.size()) {
+      return refuse(instance, ("fmi3SerializeFMUState: size " + std::to_string(size) + " but the state is " +
+                               std::to_string(state.bytes.size()) + " bytes (fmi3SerializedFMUStateSize)")
+                                  .c_str());
+    }
+    std::memcpy(serializedState, state.bytes.data(), state.bytes.size());
+    return fmi3OK;
+  });
 }
-fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte[], size_t, fmi3FMUState*) {
-  return refuse(instance, "fmi3DeserializeFMUState: not provided (canSerializeFMUState = false)");
+fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte serializedState[], size_t size,
+                                   fmi3FMUState* FMUState) {
+  return guarded(instance, [&](Fmu3& f) {
+    if (FMUState == nullptr) return refuse(instance, "fmi3DeserializeFMUState: FMUState is NULL");
+    std::unique_ptr<ehpt::fmu::SavedState> state;
+    if (!f.instance->deserialize(serializedState, size, state)) return fmi3Error;
+    if (*FMUState != nullptr) {  // a state given is overwritten, as fmi3GetFMUState does
+      *static_cast<ehpt::fmu::SavedState*>(*FMUState) = std::move(*state);
+    } else {
+      *FMUState = state.release();
+    }
+    return fmi3OK;
+  });
 }
 
 fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueReference[], size_t, const fmi3ValueReference[],

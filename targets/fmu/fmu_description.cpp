@@ -248,12 +248,12 @@ std::string model_description_3(const Description& d, const std::string& model_i
        xml_escape(generation_tool) + "\" variableNamingConvention=\"flat\">\n";
   // no early return, no intermediate update: what the SIL Kit importer accepts; Event Mode only
   // with a bus terminal (FMI-LS-BUS needs it for its clocks), whose session a saved state
-  // does not hold
+  // does not hold; a serialised state only with the built-in ECU (fmu_instance.hpp: SavedState)
   const bool bus = d.ecu == EcuMode::kBus;
   x += "  <CoSimulation modelIdentifier=\"" + xml_escape(model_identifier) +
        "\" canHandleVariableCommunicationStepSize=\"true\" fixedInternalStepSize=\"" + number(d.step_s) +
        "\" canBeInstantiatedOnlyOncePerProcess=\"false\" canGetAndSetFMUState=\"" + (bus ? "false" : "true") +
-       "\" canSerializeFMUState=\"false\""
+       "\" canSerializeFMUState=\"" + (d.ecu == EcuMode::kBuiltin ? "true" : "false") + "\""
        " providesIntermediateUpdate=\"false\" mightReturnEarlyFromDoStep=\"false\""
        " canReturnEarlyAfterIntermediateUpdate=\"false\" hasEventMode=\"" + (bus ? "true" : "false") + "\"/>\n";
   x += unit_definitions(d);
@@ -346,7 +346,8 @@ std::string model_description_2(const Description& d, const std::string& model_i
   x += "  <CoSimulation modelIdentifier=\"" + xml_escape(model_identifier) +
        "\" canHandleVariableCommunicationStepSize=\"true\" canInterpolateInputs=\"false\""
        " canRunAsynchronuously=\"false\" canBeInstantiatedOnlyOncePerProcess=\"false\""
-       " canNotUseMemoryManagementFunctions=\"true\" canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"false\"/>\n";
+       " canNotUseMemoryManagementFunctions=\"true\" canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"" +
+       (d.ecu == EcuMode::kBuiltin ? "true" : "false") + "\"/>\n";
   x += unit_definitions(d);
   x += "  <DefaultExperiment startTime=\"0\" stopTime=\"" + number(d.stop_s) + "\" stepSize=\"" + number(d.step_s) +
        "\"/>\n";

@@ -2,8 +2,11 @@
 #include "targets/fmu/fmu_instance.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <fstream>
 
 #include "hil/bus/bus_binding.hpp"
@@ -73,7 +76,7 @@ std::unique_ptr<Instance> Instance::make(const std::string& resource_dir, const 
     return nullptr;
   }
   std::string line, own_token, scenario;
-  std::vector<std::string> sets;
+  std::vector<std::string> sets, faults;
   EcuMode ecu = EcuMode::kBuiltin;
   Role role = Role::kPlant;
   while (std::getline(in, line)) {
@@ -81,6 +84,7 @@ std::unique_ptr<Instance> Instance::make(const std::string& resource_dir, const 
     if (line.rfind("token ", 0) == 0) own_token = line.substr(6);
     if (line.rfind("scenario ", 0) == 0) scenario = line.substr(9);
     if (line.rfind("set ", 0) == 0) sets.push_back(line.substr(4));
+    if (line.rfind("fault ", 0) == 0) faults.push_back(line.substr(6));
     if (line == "ecu none") ecu = EcuMode::kNone;
     if (line == "bus ls-bus") ecu = EcuMode::kBus;
     if (line == "role ecu") role = Role::kEcu;
@@ -102,11 +106,15 @@ std::unique_ptr<Instance> Instance::make(const std::string& resource_dir, const 
   hil::Scenario sc;
   std::vector<std::string> errors;
   std::vector<std::pair<std::string, double>> numbers;  // the parameters, as ehpt fmu described them
-  if (!hil::load_scenario(dir + scenario, sets, sc, errors) || !hil::scenario_numbers(dir + scenario, sets, numbers, errors)) {
+  if (!hil::load_scenario(dir + scenario, sets, faults, sc, errors) ||
+      !hil::scenario_numbers(dir + scenario, sets, numbers, errors)) {
     for (const std::string& e : errors) log(kError, "logStatusError", e);
     return nullptr;
   }
-  return std::unique_ptr<Instance>(new Instance(std::move(sc), dir + scenario, std::move(sets), ecu, role, log, fmi, numbers));
+  std::unique_ptr<Instance> made(new Instance(std::move(sc), dir + scenario, std::move(sets), ecu, role, log, fmi, numbers));
+  made->token_ = own_token;
+  made->faults_ = std::move(faults);
+  return made;
 }
 
 bool Instance::fail(const std::string& message) {
@@ -185,7 +193,7 @@ bool Instance::reload(const char* call) {
   }
   std::vector<std::string> errors;
   hil::Scenario sc;
-  if (!hil::load_scenario(scenario_path_, sets, sc, errors)) {
+  if (!hil::load_scenario(scenario_path_, sets, faults_, sc, errors)) {
     for (const std::string& e : errors) log_(kError, "logStatusError", e);
     return fail(std::string(call) + ": the scenario does not load with " +
                 (changed.empty() ? std::string("the importer's stop time") : "the parameters set (" + changed + ")") +
@@ -415,12 +423,171 @@ bool Instance::get_state(std::unique_ptr<SavedState>& out) {
   out->ev_command = ev_command_;
   out->state = static_cast<int>(state_);
   out->stop_s = stop_s_;
+  // the way here, for a serialised state: the settings the simulation was built with, the step
+  out->step = sim_->step_index();
+  out->sets.clear();
+  if (!stop_set_.empty()) out->sets.push_back(stop_set_);
+  for (const Variable& v : description_.variables) {
+    const double now = values_[v.vr];
+    if (v.source == Source::kParameter && std::memcmp(&now, &v.start, sizeof now) != 0) {
+      out->sets.push_back(v.name + "=" + io::number_text(now));
+    }
+  }
+  out->digest = outputs_digest();
+  out->bytes.clear();
+  return true;
+}
+
+std::uint64_t Instance::outputs_digest() const {
+  std::uint64_t h = 14695981039346656037ull;  // FNV-1a over the bytes of the doubles
+  const auto mix = [&](double x) {
+    unsigned char b[sizeof x];
+    std::memcpy(b, &x, sizeof x);
+    for (const unsigned char c : b) h = (h ^ c) * 1099511628211ull;
+  };
+  mix(sim_ ? sim_->time_s() : 0.0);
+  for (const auto& [vr, i] : signal_vrs_) mix(values_[vr]);
+  return h;
+}
+
+bool Instance::serialize(SavedState& saved) {
+  const char* call = fmi_ == Fmi::k3 ? "fmi3SerializeFMUState" : "fmi2SerializeFMUstate";
+  if (ecu_ != EcuMode::kBuiltin) {
+    return fail(std::string(call) + ": not for an FMU without its built-in ECU (canSerializeFMUState = false): its state "
+                "depends on the inputs the importer gave, which the FMU does not keep; fmi3GetFMUState works");
+  }
+  if (!saved.bytes.empty()) return true;
+  std::string b = "ehpt-fmu-state 1\ntoken " + token_ + "\nstep " + std::to_string(saved.step) + "\nstate " +
+                  std::to_string(saved.state) + "\ndigest " + std::to_string(saved.digest) + "\n";
+  for (const std::string& set : saved.sets) b += "set " + set + "\n";
+  saved.bytes = std::move(b);
+  return true;
+}
+
+bool Instance::deserialize(const std::uint8_t* bytes, std::size_t n, std::unique_ptr<SavedState>& out) {
+  const char* call = fmi_ == Fmi::k3 ? "fmi3DeserializeFMUState" : "fmi2DeSerializeFMUstate";
+  if (ecu_ != EcuMode::kBuiltin) {
+    return fail(std::string(call) + ": not for an FMU without its built-in ECU (canSerializeFMUState = false)");
+  }
+  if (bytes == nullptr || n == 0 || n > (1u << 20)) {
+    return fail(std::string(call) + ": " + std::to_string(n) + " bytes: not a serialised state of an ehpt FMU");
+  }
+  const std::string text(reinterpret_cast<const char*>(bytes), n);
+  auto s = std::make_unique<SavedState>();
+  std::size_t at = 0;
+  int line_no = 0;
+  bool magic = false, token = false, step = false, state = false, digest = false;
+  while (at < text.size()) {
+    const std::size_t end = text.find('\n', at);
+    const std::string line = text.substr(at, end == std::string::npos ? std::string::npos : end - at);
+    at = end == std::string::npos ? text.size() : end + 1;
+    ++line_no;
+    const auto whole = [&](const std::string& v, std::int64_t lo, std::int64_t hi, std::int64_t& x) {
+      char* stop = nullptr;
+      errno = 0;
+      const long long y = std::strtoll(v.c_str(), &stop, 10);
+      if (v.empty() || *stop != '\0' || errno != 0 || y < lo || y > hi) return false;
+      x = y;
+      return true;
+    };
+    bool ok = true;
+    std::int64_t x = 0;
+    if (line_no == 1) {
+      ok = magic = line == "ehpt-fmu-state 1";
+    } else if (line.rfind("token ", 0) == 0) {
+      ok = token = line.substr(6) == token_;
+      if (!ok) return fail(std::string(call) + ": a state of another FMU (token " + line.substr(6) + ", this one " + token_ + ")");
+    } else if (line.rfind("step ", 0) == 0) {
+      ok = step = whole(line.substr(5), 0, std::numeric_limits<std::int64_t>::max(), s->step);
+    } else if (line.rfind("state ", 0) == 0) {
+      ok = state = whole(line.substr(6), static_cast<int>(State::kStep), static_cast<int>(State::kTerminated), x) &&
+                   x != static_cast<int>(State::kEvent);
+      s->state = static_cast<int>(x);
+    } else if (line.rfind("digest ", 0) == 0) {
+      char* stop = nullptr;
+      errno = 0;
+      const std::string v = line.substr(7);
+      s->digest = std::strtoull(v.c_str(), &stop, 10);
+      ok = digest = !v.empty() && v[0] != '-' && *stop == '\0' && errno == 0;
+    } else if (line.rfind("set ", 0) == 0) {
+      s->sets.push_back(line.substr(4));
+    } else {
+      ok = false;
+    }
+    if (!ok) return fail(std::string(call) + ": line " + std::to_string(line_no) + " (\"" + line.substr(0, 60) + "\") is not a serialised state's");
+  }
+  if (!(magic && token && step && state && digest)) {
+    return fail(std::string(call) + ": incomplete (it needs the lines ehpt-fmu-state, token, step, state, digest)");
+  }
+  s->bytes = text;
+  out = std::move(s);
+  return true;
+}
+
+bool Instance::restore_by_rerun(const SavedState& saved) {
+  const char* call = name(Call::kSetState);
+  std::vector<std::string> sets = sets_;
+  std::string stop_set;
+  std::vector<std::pair<std::uint32_t, double>> parameters;
+  for (const std::string& set : saved.sets) {
+    sets.push_back(set);
+    const std::size_t eq = set.find('=');
+    const std::string key = set.substr(0, eq);
+    if (key == "solver.duration_s") {
+      stop_set = set;
+      continue;
+    }
+    const auto v = std::find_if(description_.variables.begin(), description_.variables.end(),
+                                [&](const Variable& x) { return x.source == Source::kParameter && x.name == key; });
+    char* stop = nullptr;
+    const double value = eq == std::string::npos ? NAN : std::strtod(set.c_str() + eq + 1, &stop);
+    if (v == description_.variables.end() || !std::isfinite(value) || *stop != '\0') {
+      return fail(std::string(call) + ": the state sets \"" + set + "\", not a parameter of this FMU");
+    }
+    parameters.emplace_back(v->vr, value);
+  }
+  hil::Scenario sc;
+  std::vector<std::string> errors;
+  if (!hil::load_scenario(scenario_path_, sets, faults_, sc, errors)) {
+    for (const std::string& e : errors) log_(kError, "logStatusError", e);
+    return fail(std::string(call) + ": the state's scenario does not load (the problems above)");
+  }
+  hil::SimulationOptions opt;
+  opt.columns = {0};
+  opt.chunk_steps = kChunkSteps;
+  std::unique_ptr<hil::Simulation> sim = hil::make_simulation(sc, opt);
+  if (!sim || saved.step > sim->total_steps()) {
+    return fail(std::string(call) + ": step " + std::to_string(saved.step) + " is past this scenario's end");
+  }
+  std::int64_t left = saved.step;  // the way there: the same steps, so the same state (the run is deterministic)
+  while (left > 0 && !sim->finished()) {
+    const std::int64_t k = sim->step(std::min(left, kChunkSteps));
+    sim->clear_rows();
+    if (k <= 0) break;
+    left -= k;
+  }
+  sc_ = std::move(sc);
+  sim_ = std::move(sim);
+  stop_set_ = stop_set;
+  stop_s_ = static_cast<double>(sc_.solver.steps) * sc_.solver.step_s;
+  for (const Variable& v : description_.variables) {
+    if (v.source == Source::kParameter) values_[v.vr] = v.start;
+  }
+  for (const auto& [vr, value] : parameters) values_[vr] = value;
+  refresh_outputs();
+  if (left > 0 || outputs_digest() != saved.digest) {
+    return fail(std::string(call) + ": the state does not run again to the same point (" +
+                (left > 0 ? "the plant stopped " + std::to_string(left) + " steps before it" : std::string("its outputs differ")) +
+                "): a state of another build or a damaged one");
+  }
+  state_ = static_cast<State>(saved.state);
   return true;
 }
 
 bool Instance::set_state(const SavedState& saved) {
   if (has_bus()) return fail(std::string(name(Call::kSetState)) + ": not with a bus terminal (canGetAndSetFMUState = false)");
   if (state_ != State::kStep && state_ != State::kTerminated) return in(State::kStep, name(Call::kSetState));
+  if (!saved.sim && !saved.bytes.empty()) return restore_by_rerun(saved);  // a deserialised state
   if (!saved.sim || saved.values.size() != values_.size() || !sim_->restore_state(*saved.sim)) {
     return fail(std::string(name(Call::kSetState)) + ": not a state of this FMU");
   }
@@ -463,7 +630,7 @@ bool Instance::reset() {
   ecu_step_ = 0;
   std::vector<std::string> errors;
   hil::Scenario sc;
-  if (!hil::load_scenario(scenario_path_, sets_, sc, errors)) {
+  if (!hil::load_scenario(scenario_path_, sets_, faults_, sc, errors)) {
     for (const std::string& e : errors) log_(kError, "logStatusError", e);
     return fail(std::string(name(Call::kReset)) + ": the scenario no longer loads");
   }

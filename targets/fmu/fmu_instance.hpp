@@ -11,6 +11,7 @@
 //   token <the instantiationToken of modelDescription.xml>
 //   scenario <its path inside resources/>
 //   set <key=value>            (each `ehpt fmu --set`, in order)
+//   fault <spec>               (each `ehpt fmu --fault`, in order)
 //   ecu none                   (--ecu none: the importer is the ECU)
 //   bus ls-bus                 (--bus ls-bus: the ECU is on the FMU's CAN terminal)
 //   role ecu                   (--role ecu: the FMU is the scenario's built-in ECU on it)
@@ -49,7 +50,12 @@ struct Log {
 // Which standard's functions call in: the names its messages give the calls.
 enum class Fmi { k2, k3 };
 
-// An FMU state (fmi3GetFMUState): everything an instance needs to go on from a point.
+// An FMU state (fmi3GetFMUState): everything an instance needs to go on from a point. A
+// serialised one (fmi3SerializeFMUState) holds the way there instead: the scenario's settings
+// (the parameters and stop time the instance had) and the plant step, with a digest of the
+// outputs there. The run is deterministic, so fmi3SetFMUState of a deserialised state runs
+// the simulation again to that step, in this process or another, and checks the digest. Only
+// with the built-in ECU: without it the state depends on inputs the FMU does not keep.
 struct SavedState {
   std::unique_ptr<hil::SimulationState> sim;
   std::vector<double> values;
@@ -59,6 +65,10 @@ struct SavedState {
   msgs::EvCommand ev_command{};
   int state = 0;
   double stop_s = 0.0;
+  std::int64_t step = 0;           // the plant step it is at
+  std::vector<std::string> sets;   // the stop time's and the changed parameters' --set overrides
+  std::uint64_t digest = 0;        // of the time and every output there
+  std::string bytes;               // the serialised form (made once, by the first size query)
 };
 
 }  // namespace ehpt::fmu
@@ -116,6 +126,10 @@ class Instance {
   // did from there. They allocate (the state's copies), doStep does not.
   bool get_state(std::unique_ptr<SavedState>& out);
   bool set_state(const SavedState& saved);
+  // A state as bytes (saved.bytes, made once) and back (a state of this FMU, its token checked;
+  // a damaged one refused with what is wrong). Only with the built-in ECU.
+  bool serialize(SavedState& saved);
+  bool deserialize(const std::uint8_t* bytes, std::size_t n, std::unique_ptr<SavedState>& out);
 
   const Description& description() const { return description_; }
 
@@ -136,6 +150,10 @@ class Instance {
   bool in(State s, const char* call);
   // the variables' values at the current point: signals, and (--ecu none) the sensor message
   void refresh_outputs();
+  // the time and every output now, as one number (a serialised state's check)
+  std::uint64_t outputs_digest() const;
+  // set_state of a deserialised state: the scenario again, run to its step, the digest checked
+  bool restore_by_rerun(const SavedState& saved);
   // the command from the inputs, to the simulation (--ecu none)
   void apply_inputs();
   template <class T>
@@ -145,8 +163,10 @@ class Instance {
   bool get_values(const char* call, Type type, const std::uint32_t* vrs, std::size_t n, T* values, std::size_t n_values);
 
   hil::Scenario sc_;
+  std::string token_;  // the instantiationToken (a serialised state names it)
   std::string scenario_path_;  // reloaded when the importer asks for another stop time
   std::vector<std::string> sets_;  // the manifest's overrides
+  std::vector<std::string> faults_;  // the manifest's faults (ehpt fmu --fault), as --fault gives them
   std::string stop_set_;           // "solver.duration_s=..." when the importer asked for another stop time
   Log log_;
   Description description_;

@@ -144,7 +144,10 @@ bool Fmi3Fmu::open(const std::string& fmu_path, std::string& error) {
            symbol(library_, "fmi2GetBooleanStatus", get_boolean_status2, error) &&
            symbol(library_, "fmi2GetVersion", get_version2, error) &&
            symbol(library_, "fmi2GetFMUstate", get_state2, error) && symbol(library_, "fmi2SetFMUstate", set_state2, error) &&
-           symbol(library_, "fmi2FreeFMUstate", free_state2, error);
+           symbol(library_, "fmi2FreeFMUstate", free_state2, error) &&
+           symbol(library_, "fmi2SerializedFMUstateSize", serialized_size2, error) &&
+           symbol(library_, "fmi2SerializeFMUstate", serialize2, error) &&
+           symbol(library_, "fmi2DeSerializeFMUstate", deserialize2, error);
   }
   return symbol(library_, "fmi3InstantiateCoSimulation", instantiate, error) &&
          symbol(library_, "fmi3FreeInstance", free_instance, error) &&
@@ -156,6 +159,9 @@ bool Fmi3Fmu::open(const std::string& fmu_path, std::string& error) {
          symbol(library_, "fmi3Reset", reset, error) && symbol(library_, "fmi3GetVersion", get_version, error) &&
          symbol(library_, "fmi3GetFMUState", get_state, error) && symbol(library_, "fmi3SetFMUState", set_state, error) &&
          symbol(library_, "fmi3FreeFMUState", free_state, error) &&
+         symbol(library_, "fmi3SerializedFMUStateSize", serialized_size, error) &&
+         symbol(library_, "fmi3SerializeFMUState", serialize, error) &&
+         symbol(library_, "fmi3DeserializeFMUState", deserialize, error) &&
          symbol(library_, "fmi3EnterEventMode", enter_event_mode, error) &&
          symbol(library_, "fmi3UpdateDiscreteStates", update_discrete_states, error) &&
          symbol(library_, "fmi3EnterStepMode", enter_step_mode, error) && symbol(library_, "fmi3GetClock", get_clock, error) &&
@@ -200,6 +206,16 @@ bool event_iteration(std::vector<Node>& nodes, BusRun& run, std::string& error) 
         return false;
       }
       if (i == 0 && run.first_plant_tx.empty()) run.first_plant_tx.assign(data, data + size);
+      for (std::size_t at = 0; i == 0 && at + 8 <= size;) {  // the plant's operations, by OP code
+        const auto u32 = [&](std::size_t k) {
+          return static_cast<std::uint32_t>(data[k] | data[k + 1] << 8 | data[k + 2] << 16 | data[k + 3] << 24);
+        };
+        const std::uint32_t op = u32(at), length = u32(at + 4);
+        if (length < 8 || length > size - at) break;
+        ++run.plant_ops[op];
+        if (op == 0x41 && length == 9) run.plant_status.push_back(data[at + 8]);
+        at += length;
+      }
       if (size == 0) continue;
       for (std::size_t j = 0; j < nodes.size(); ++j) {  // direct connection: every other node hears it
         if (j == i) continue;

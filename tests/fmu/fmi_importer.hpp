@@ -54,6 +54,9 @@ class Fmi3Fmu {
   fmi3GetFMUStateTYPE* get_state = nullptr;
   fmi3SetFMUStateTYPE* set_state = nullptr;
   fmi3FreeFMUStateTYPE* free_state = nullptr;
+  fmi3SerializedFMUStateSizeTYPE* serialized_size = nullptr;
+  fmi3SerializeFMUStateTYPE* serialize = nullptr;
+  fmi3DeserializeFMUStateTYPE* deserialize = nullptr;
   // Event Mode and the bus terminal (FMI-LS-BUS): an FMU with hasEventMode = "true"
   fmi3EnterEventModeTYPE* enter_event_mode = nullptr;
   fmi3UpdateDiscreteStatesTYPE* update_discrete_states = nullptr;
@@ -82,6 +85,9 @@ class Fmi3Fmu {
   fmi2GetFMUstateTYPE* get_state2 = nullptr;
   fmi2SetFMUstateTYPE* set_state2 = nullptr;
   fmi2FreeFMUstateTYPE* free_state2 = nullptr;
+  fmi2SerializedFMUstateSizeTYPE* serialized_size2 = nullptr;
+  fmi2SerializeFMUstateTYPE* serialize2 = nullptr;
+  fmi2DeSerializeFMUstateTYPE* deserialize2 = nullptr;
   // instantiate (FMI 2.0) with this FMU's guid and resources as a file URI, logging into `log`
   fmi2Component make_instance2(const char* name, const char* guid_override = nullptr);
 
@@ -107,6 +113,8 @@ struct BusRun {
   std::int64_t events = 0, transfers = 0, bytes = 0;
   fmi3Status terminate_status = fmi3OK;
   std::vector<std::uint8_t> first_plant_tx;  // the plant's first Tx_Data (sample 0)
+  std::map<std::uint32_t, std::int64_t> plant_ops;  // the plant's Tx operations by OP code
+  std::vector<std::uint8_t> plant_status;           // the Status values the plant sent, in order
 };
 bool run_bus_pair(Fmi3Fmu& a, fmi3Instance ia, Fmi3Fmu* b, fmi3Instance ib, std::int64_t k, double stop_s,
                   std::vector<std::vector<double>>& rows, BusRun& run, std::string& error);

@@ -285,6 +285,80 @@ TEST_F(LsBus, TheBusRunPhaseAllocatesNothing) {
   ecu.free_instance(e);
 }
 
+// Faults on frames act in the LS-BUS plant as on any bus: the ECU's PsdCommand1 lost for 50 ms
+// while the car accelerates (examples/tests/command_frames_dropped.toml's fault) gives `ehpt run
+// --fault` (the in-process bus, which is the socketcand session: bus_faults_e2e) bit for bit,
+// safe state included; error_frames puts one Bus Error operation on the bus per ECU sample,
+// bus_off a Status bus-off where it starts and error-active where it ends.
+TEST_F(LsBus, BusFaultsActOnTheFramesAndErrorFramesAreBusErrorAndStatusOperations) {
+  const std::string d = "solver.duration_s=" + std::to_string(static_cast<int>(kStop_s));
+  const std::string drop = "kind=drop target=PsdCommand1 at_s=12 until_s=12.05";
+  ASSERT_EQ(ehpt({"fmu", "psecu2_nedc", "--bus", "ls-bus", "--set", d, "--fault", drop, "--out", *dir_ + "/drop.fmu"}), 0);
+  ASSERT_EQ(ehpt({"run", "psecu2_nedc", "--quiet", "--out", *dir_ + "/refdrop", "--set", "output.interval_s=0.001", "--set", d,
+                  "--fault", drop}),
+            0);
+  std::map<std::string, std::vector<double>> ref;
+  {
+    std::ifstream in(*dir_ + "/refdrop/timeseries.csv");
+    std::string line;
+    std::getline(in, line);
+    std::vector<std::string> names;
+    std::stringstream hs(line);
+    for (std::string n; std::getline(hs, n, ',');) names.push_back(n);
+    while (std::getline(in, line)) {
+      std::stringstream ls(line);
+      std::size_t c = 0;
+      for (std::string v; std::getline(ls, v, ','); ++c) ref[names[c]].push_back(std::strtod(v.c_str(), nullptr));
+    }
+  }
+  Fmi3Fmu plant, ecu;
+  std::string error;
+  ASSERT_TRUE(plant.open(*dir_ + "/drop.fmu", error)) << error;
+  ASSERT_TRUE(ecu.open(*dir_ + "/ecu.fmu", error)) << error;
+  fmi3Instance p = plant.make_instance("plant", nullptr, true), e = ecu.make_instance("ecu", nullptr, true);
+  std::vector<std::vector<double>> rows;
+  BusRun run;
+  ASSERT_TRUE(run_bus_pair(plant, p, &ecu, e, 10, kStop_s, rows, run, error)) << error;
+  std::string first;
+  EXPECT_EQ(mismatches(plant, rows, ref, 10, first), 0) << "first difference " << first;
+  // the safe state came: the motor's torque request 0 at 12.03 s, not 0 just before the fault
+  const std::size_t tau = static_cast<std::size_t>(
+      std::find(plant.output_names.begin(), plant.output_names.end(), "motTauRef_Nm") - plant.output_names.begin()) + 1;
+  EXPECT_GT(rows[1198][tau], 1.0) << "t = " << rows[1198][0];  // 11.99 s
+  EXPECT_EQ(rows[1202][tau], 0.0) << "t = " << rows[1202][0];  // 12.03 s
+  plant.free_instance(p);
+  ecu.free_instance(e);
+
+  // error frames and bus-off: LS-BUS operations from the plant's terminal
+  ASSERT_EQ(ehpt({"fmu", "psecu2_nedc", "--bus", "ls-bus", "--set", "solver.duration_s=2", "--fault",
+                  "kind=error_frames at_s=0.5 until_s=0.55", "--fault", "kind=bus_off at_s=1 until_s=1.2", "--out",
+                  *dir_ + "/errors.fmu"}),
+            0);
+  ASSERT_TRUE(plant.open(*dir_ + "/errors.fmu", error)) << error;
+  Fmi3Fmu ecu2;
+  ASSERT_TRUE(ecu2.open(*dir_ + "/ecu.fmu", error)) << error;
+  p = plant.make_instance("plant", nullptr, true);
+  e = ecu2.make_instance("ecu", nullptr, true);
+  BusRun faulted;
+  ASSERT_TRUE(run_bus_pair(plant, p, &ecu2, e, 10, 2.0, rows, faulted, error)) << error;
+  EXPECT_EQ(faulted.plant_ops[io::can::ls_bus::kOpBusError], 5) << "one per ECU sample of 0.5 .. 0.55 s";
+  EXPECT_EQ(faulted.plant_status, (std::vector<std::uint8_t>{io::can::ls_bus::kBusOff, io::can::ls_bus::kErrorActive}));
+  EXPECT_EQ(run.plant_ops.count(io::can::ls_bus::kOpBusError), 0u) << "none without the fault";
+  // bus-off loses every frame for 0.2 s: the plant's commands time out (a warning at terminate)
+  EXPECT_EQ(faulted.terminate_status, fmi3OK) << "timeouts under bus faults are what the faults were for";
+  plant.free_instance(p);
+  ecu2.free_instance(e);
+
+  // where frames have no bus: refused when the FMU is made, with what to do
+  EXPECT_EQ(ehpt({"fmu", "psecu2_nedc", "--fault", drop, "--out", *dir_ + "/nobus.fmu"}), 2);
+  EXPECT_FALSE(fs::exists(*dir_ + "/nobus.fmu"));
+  EXPECT_EQ(ehpt({"fmu", "psecu2_nedc", "--bus", "ls-bus", "--role", "ecu", "--fault", drop, "--out", *dir_ + "/ecuf.fmu"}), 2);
+  EXPECT_EQ(ehpt({"fmu", "psecu2_nedc", "--bus", "ls-bus", "--fault", "kind=drop target=NoSuchFrame at_s=1", "--out",
+                  *dir_ + "/badf.fmu"}),
+            2);
+  EXPECT_FALSE(fs::exists(*dir_ + "/badf.fmu"));
+}
+
 TEST_F(LsBus, WrongUseIsAnErrorWithAMessage) {
   Fmi3Fmu plant;
   std::string error;

@@ -340,6 +340,150 @@ TEST_F(Fmu3, AStateSavedAndRestoredGoesOnBitForBit) {
   }
 }
 
+// A serialised state (FMI 3.0 and 2.0) is the way to its point: deserialised in another
+// instance, one at another time and with other parameters, it goes on bit for bit as the run
+// it was taken from, parameters included (a heavy car's 12 s state goes on as ehpt run of the
+// heavy car). A damaged state, another FMU's and one whose re-run does not reach its digest are
+// refused with a message; without the built-in ECU there is none (canSerializeFMUState false).
+TEST_F(Fmu3, ASerialisedStateGoesOnInAnotherInstanceBitForBit) {
+  ASSERT_EQ(ehpt({"fmu", "psecu2_nedc", "--fmi", "2", "--set", "solver.duration_s=20", "--out", *dir_ + "/ser2.fmu"}), 0);
+  for (const char* file : {"/p.fmu", "/ser2.fmu"}) {
+    Fmi3Fmu fmu;
+    std::string error;
+    ASSERT_TRUE(fmu.open(*dir_ + file, error)) << error;
+    const bool v3 = fmu.version == 3;
+    ASSERT_NE(fmu.xml.find(v3 ? "canSerializeFMUState=\"true\"" : "canSerializeFMUstate=\"true\""), std::string::npos);
+    std::vector<fmi3ValueReference> refs;
+    for (const std::string& n : fmu.output_names) refs.push_back(fmu.vr.at(n));
+    const fmi3ValueReference mass = fmu.vr.at("vehicle.vehicle.mass_kg");
+    const auto start = [&](const char* name, double mass_kg) -> void* {
+      void* inst = v3 ? fmu.make_instance(name) : fmu.make_instance2(name);
+      if (inst == nullptr) return nullptr;
+      const bool ok = v3 ? fmu.enter_initialization(inst, fmi3False, 0.0, 0.0, fmi3True, 20.0) == fmi3OK &&
+                               fmu.set_float64(inst, &mass, 1, &mass_kg, 1) == fmi3OK &&
+                               fmu.exit_initialization(inst) == fmi3OK
+                         : fmu.setup_experiment2(inst, fmi2False, 0.0, 0.0, fmi2True, 20.0) == fmi2OK &&
+                               fmu.enter_initialization2(inst) == fmi2OK && fmu.set_real2(inst, &mass, 1, &mass_kg) == fmi2OK &&
+                               fmu.exit_initialization2(inst) == fmi2OK;
+      return ok ? inst : nullptr;
+    };
+    const auto run = [&](void* inst, std::int64_t a, std::int64_t b, std::vector<std::vector<double>>* rows) {
+      for (std::int64_t n = a; n < b; ++n) {
+        std::vector<double> y(refs.size());
+        fmi3Boolean e, term, er;
+        fmi3Float64 last;
+        const bool okay = v3 ? fmu.do_step(inst, static_cast<double>(n) * 0.01, 0.01, fmi3False, &e, &term, &er, &last) == fmi3OK &&
+                                   fmu.get_float64(inst, refs.data(), refs.size(), y.data(), y.size()) == fmi3OK
+                             : fmu.do_step2(inst, static_cast<double>(n) * 0.01, 0.01, fmi2False) == fmi2OK &&
+                                   fmu.get_real2(inst, refs.data(), refs.size(), y.data()) == fmi2OK;
+        if (!okay) return false;
+        if (rows != nullptr) rows->push_back(std::move(y));
+      }
+      return true;
+    };
+    // the heavy car to 12 s, its state as bytes; the instance and the state then freed
+    void* a = start("a", 1800.0);
+    ASSERT_NE(a, nullptr) << (fmu.log.empty() ? "" : fmu.log.back());
+    ASSERT_TRUE(run(a, 0, 1200, nullptr));
+    void* state = nullptr;
+    std::size_t size = 0;
+    std::vector<char> bytes;
+    if (v3) {
+      ASSERT_EQ(fmu.get_state(a, &state), fmi3OK);
+      ASSERT_EQ(fmu.serialized_size(a, state, &size), fmi3OK);
+      bytes.resize(size);
+      EXPECT_EQ(fmu.serialize(a, state, reinterpret_cast<fmi3Byte*>(bytes.data()), size - 1), fmi3Error);  // too small
+      ASSERT_EQ(fmu.serialize(a, state, reinterpret_cast<fmi3Byte*>(bytes.data()), size), fmi3OK);
+      fmu.free_state(a, &state);
+      fmu.free_instance(a);
+    } else {
+      ASSERT_EQ(fmu.get_state2(a, &state), fmi2OK);
+      ASSERT_EQ(fmu.serialized_size2(a, state, &size), fmi2OK);
+      bytes.resize(size);
+      ASSERT_EQ(fmu.serialize2(a, state, bytes.data(), size), fmi2OK);
+      fmu.free_state2(a, &state);
+      fmu.free_instance2(a);
+    }
+    ASSERT_GT(size, 20u);
+    // another instance, of the standard car, at 3 s: the bytes make it the heavy car at 12 s
+    void* b = start("b", 1500.0);
+    ASSERT_NE(b, nullptr);
+    ASSERT_TRUE(run(b, 0, 300, nullptr));
+    void* restored = nullptr;
+    if (v3) {
+      ASSERT_EQ(fmu.deserialize(b, reinterpret_cast<const fmi3Byte*>(bytes.data()), size, &restored), fmi3OK);
+      ASSERT_EQ(fmu.set_state(b, restored), fmi3OK) << (fmu.log.empty() ? "" : fmu.log.back());
+    } else {
+      ASSERT_EQ(fmu.deserialize2(b, bytes.data(), size, &restored), fmi2OK);
+      ASSERT_EQ(fmu.set_state2(b, restored), fmi2OK) << (fmu.log.empty() ? "" : fmu.log.back());
+    }
+    std::vector<std::vector<double>> rows;
+    ASSERT_TRUE(run(b, 1200, 1800, &rows));
+    int off_run = 0;  // ehpt run of the heavy car: row r is plant step 12 010 + 10 r
+    for (std::size_t r = 0; r < rows.size(); ++r) {
+      for (std::size_t j = 0; j < fmu.output_names.size(); ++j) {
+        off_run += same_bits(rows[r][j], refheavy_->at(fmu.output_names[j])[(1200 + r + 1) * 10]) ? 0 : 1;
+      }
+    }
+    EXPECT_EQ(off_run, 0) << file;
+    int off_light = 0;  // and not the standard car's
+    for (std::size_t j = 0; j < fmu.output_names.size(); ++j) {
+      off_light += same_bits(rows.back()[j], ref_->at(fmu.output_names[j])[18000]) ? 0 : 1;
+    }
+    EXPECT_GT(off_light, 0) << file;
+    double m = 0.0;
+    EXPECT_EQ(v3 ? static_cast<int>(fmu.get_float64(b, &mass, 1, &m, 1)) : static_cast<int>(fmu.get_real2(b, &mass, 1, &m)), 0);
+    EXPECT_EQ(m, 1800.0) << "the parameter came with the state";
+    if (v3) {
+      fmu.free_state(b, &restored);
+      fmu.free_instance(b);
+    } else {
+      fmu.free_state2(b, &restored);
+      fmu.free_instance2(b);
+    }
+    if (!v3) continue;
+    // refused, each with its message: bytes that are not a state, another FMU's, a wrong digest
+    const auto refused = [&](std::string text, const char* why, bool at_set) {
+      void* c = start("c", 1500.0);
+      void* st = nullptr;
+      const fmi3Status d = fmu.deserialize(c, reinterpret_cast<const fmi3Byte*>(text.data()), text.size(), &st);
+      const fmi3Status set = d == fmi3OK ? fmu.set_state(c, st) : fmi3Error;
+      EXPECT_EQ(at_set ? set : d, fmi3Error) << why;
+      EXPECT_TRUE(logged(fmu, why)) << why << ": " << (fmu.log.empty() ? "" : fmu.log.back());
+      if (st != nullptr) fmu.free_state(c, &st);
+      fmu.free_instance(c);
+    };
+    const std::string good(bytes.begin(), bytes.end());
+    refused("hello", "is not a serialised state's", false);
+    std::string other = good;
+    other.replace(other.find("token {") + 7, 4, "dead");
+    refused(other, "a state of another FMU", false);
+    std::string digest = good;
+    const std::size_t at = digest.find("digest ") + 7;
+    digest[at] = digest[at] == '1' ? '2' : '1';
+    refused(digest, "does not run again to the same point", true);
+    std::string far = good;
+    far.replace(far.find("step ") + 5, far.find('\n', far.find("step ")) - far.find("step ") - 5, "99999999");
+    refused(far, "past this scenario's end", true);
+  }
+  // without the built-in ECU: no serialised state, and the FMU says so in its description
+  ASSERT_EQ(ehpt({"fmu", "psecu2_nedc", "--ecu", "none", "--set", "solver.duration_s=20", "--out", *dir_ + "/nser.fmu"}), 0);
+  Fmi3Fmu none;
+  std::string error;
+  ASSERT_TRUE(none.open(*dir_ + "/nser.fmu", error)) << error;
+  EXPECT_NE(none.xml.find("canSerializeFMUState=\"false\""), std::string::npos);
+  fmi3Instance inst = none.make_instance("n");
+  ASSERT_EQ(none.enter_initialization(inst, fmi3False, 0.0, 0.0, fmi3True, 20.0), fmi3OK);
+  ASSERT_EQ(none.exit_initialization(inst), fmi3OK);
+  fmi3FMUState st = nullptr;
+  ASSERT_EQ(none.get_state(inst, &st), fmi3OK);  // a state in memory: yes
+  std::size_t n = 0;
+  EXPECT_EQ(none.serialized_size(inst, st, &n), fmi3Error);
+  EXPECT_TRUE(logged(none, "depends on the inputs the importer gave"));
+  none.free_state(inst, &st);
+  none.free_instance(inst);
+}
+
 // A plant fault that stops `ehpt run` (exit 3: here the SOC leaves its window at 14.574 s)
 // ends the FMU's run where it ends the CLI's: fmi3Discard with terminateSimulation and
 // lastSuccessfulTime there, the fault in the log, and fmi3Terminate still answers OK.

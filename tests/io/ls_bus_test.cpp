@@ -17,7 +17,7 @@ std::vector<std::uint8_t> bytes(std::initializer_list<int> v) {
   return out;
 }
 
-TEST(LsBus, CanTransmitIsOpCodeTotalLengthIdIdeRtrDataLengthData) {
+TEST(LsBusCodec, CanTransmitIsOpCodeTotalLengthIdIdeRtrDataLengthData) {
   Frame f;
   f.id = 0x123;
   f.len = 3;
@@ -36,7 +36,7 @@ TEST(LsBus, CanTransmitIsOpCodeTotalLengthIdIdeRtrDataLengthData) {
   EXPECT_EQ(ext, bytes({0x10, 0, 0, 0, 16, 0, 0, 0, 0xF0, 0xDE, 0xBC, 0x1A, 1, 0, 0, 0}));
 }
 
-TEST(LsBus, BusErrorAndStatusLayouts) {
+TEST(LsBusCodec, BusErrorAndStatusLayouts) {
   std::vector<std::uint8_t> buf(64);
   ASSERT_EQ(put_bus_error(buf, 0, 0x10, kFormError, kPrimaryErrorFlag, false), 15u);
   ASSERT_EQ(put_status(buf, 15, kBusOff), 9u);
@@ -45,7 +45,7 @@ TEST(LsBus, BusErrorAndStatusLayouts) {
                         0x41, 0, 0, 0, 9, 0, 0, 0, 3}));
 }
 
-TEST(LsBus, AnOperationThatDoesNotFitIsNotWritten) {
+TEST(LsBusCodec, AnOperationThatDoesNotFitIsNotWritten) {
   Frame f;
   f.len = 8;
   std::vector<std::uint8_t> buf(23);  // 24 needed
@@ -53,7 +53,7 @@ TEST(LsBus, AnOperationThatDoesNotFitIsNotWritten) {
   EXPECT_EQ(put_transmit(buf, 30, f), 0u);  // used past the end: no room, no overflow
 }
 
-TEST(LsBus, ParseReadsBackEveryFrameAndCountsTheRest) {
+TEST(LsBusCodec, ParseReadsBackEveryFrameAndCountsTheRest) {
   std::vector<std::uint8_t> buf(256);
   std::size_t used = 0;
   Frame a, b;
@@ -83,7 +83,7 @@ TEST(LsBus, ParseReadsBackEveryFrameAndCountsTheRest) {
   EXPECT_EQ(malformed, 0);
 }
 
-TEST(LsBus, MalformedOperationsAreCountedNeverRead) {
+TEST(LsBusCodec, MalformedOperationsAreCountedNeverRead) {
   const auto count = [](const std::vector<std::uint8_t>& in, std::int64_t& frames) {
     frames = 0;
     return parse(std::span<const std::uint8_t>(in), [&](const Frame&) { ++frames; }, [](std::span<const std::uint8_t>) {})
@@ -118,7 +118,7 @@ TEST(LsBus, MalformedOperationsAreCountedNeverRead) {
   EXPECT_EQ(count(bytes({0x41, 0, 0, 0, 9, 0, 0, 0, 7}), frames), 1);
 }
 
-TEST(LsBus, TheTerminalQueuesRxAnswersMalformedWithAFormErrorAndCountsAFullTx) {
+TEST(LsBusCodec, TheTerminalQueuesRxAnswersMalformedWithAFormErrorAndCountsAFullTx) {
   LsBusTerminal t(64, 2);
   std::vector<std::uint8_t> rx(256);
   std::size_t used = 0;
