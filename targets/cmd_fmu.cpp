@@ -54,10 +54,11 @@ const char* kFmuHelp =
     "                   contract (the DBC is in the FMU, extra/org.fmi-standard.fmi-ls-bus/);\n"
     "                   Event Mode, triggered clocks; each ECU sample must be a communication\n"
     "                   point. FMI 3.0 only. docs/fmu.md: the calling sequence\n"
-    "  --role plant|ecu with --bus: the plant (the default; it waits for its ECU's command\n"
-    "                   frames as 'ehpt plant --lockstep' does) or the scenario's built-in ECU\n"
-    "                   alone on the terminal (as 'ehpt ecu' is on a bus): connect the two\n"
-    "                   Tx_Data -> Rx_Data and the run is 'ehpt run --set vehicle.ecu.codec=can'\n"
+    "  --role plant|ecu with --bus: the plant (the default; it applies its ECU's latest\n"
+    "                   command, safe state after 3 ECU periods without one) or the scenario's\n"
+    "                   built-in ECU alone on the terminal (as 'ehpt ecu' is on a bus):\n"
+    "                   connect the two Tx_Data -> Rx_Data and the run is the lockstep bus\n"
+    "                   session's, 'ehpt run --set vehicle.ecu.codec=can'\n"
     "  --fmi 3|2        the FMI version: 3.0 (the default) or 2.0 (Simulink, OMSimulator, FMPy\n"
     "                   and older importers); the same variables and trajectory\n"
     "  --out FILE.fmu   where to write it (default out/<scenario name>.fmu); never over an\n"
@@ -81,7 +82,6 @@ bool bus_faults_fit(const hil::Scenario& sc, std::string& why) {
   }
   io::can::ls_bus::LsBusTerminal terminal;
   hil::BusPlantOptions opt;
-  opt.lockstep = true;
   opt.event_mode = true;
   return hil::make_bus_plant(sc, terminal, opt, std::move(*binding), why) != nullptr;
 }
@@ -130,6 +130,7 @@ std::string documentation_page(const fmu::Description& d, const std::string& id,
          (v.causality == fmu::Causality::kIndependent ? "independent"
           : v.causality == fmu::Causality::kInput    ? "input"
           : v.causality == fmu::Causality::kParameter ? "parameter"
+          : v.causality == fmu::Causality::kStructuralParameter ? "structuralParameter"
                                                       : "output") +
          "</td><td>" + xml_escape(v.unit) +
          "</td><td>" + xml_escape(v.description) + "</td></tr>\n";
@@ -145,10 +146,12 @@ std::string variables_table(const fmu::Description& d, const std::string& fmi) {
     const char* causality = v.causality == fmu::Causality::kIndependent ? "independent"
                             : v.causality == fmu::Causality::kInput     ? "input"
                             : v.causality == fmu::Causality::kParameter ? "parameter"
+                            : v.causality == fmu::Causality::kStructuralParameter ? "structuralParameter"
                                                                         : "output";
     std::string start;
     const bool scalar = v.type == fmu::Type::kFloat64 || v.type == fmu::Type::kBoolean;  // Binary, Clock: no start here
-    if (scalar && (v.causality == fmu::Causality::kInput || v.causality == fmu::Causality::kParameter)) {
+    if (scalar && (v.causality == fmu::Causality::kInput || v.causality == fmu::Causality::kParameter ||
+                   v.causality == fmu::Causality::kStructuralParameter)) {
       start = v.type == fmu::Type::kBoolean ? (v.start != 0.0 ? "true" : "false") : io::number_text(v.start);
     }
     std::string description = v.description;

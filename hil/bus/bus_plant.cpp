@@ -245,7 +245,7 @@ class BusPlant final : public ExternalDriver,
       // wait for the ECU to start is not in it)
       b.number("exchange_s", exchange_s());
       b.number("samples_per_s", samples_per_s());
-    } else if (!opt_.realtime) {  // real time: the loop's own figures ("realtime")
+    } else if (!opt_.realtime && !opt_.event_mode) {  // real time: the loop's own figures ("realtime")
       b.integer("missed_ticks", pacer_.missed_ticks());
       b.object("period_error_us", timing);
     }
@@ -255,14 +255,14 @@ class BusPlant final : public ExternalDriver,
     std::snprintf(buf, sizeof buf,
                   "bus           %s, %s: %lld %s in, %lld out, %lld rejected; %lld commands, %lld stale samples, "
                   "%lld timeouts (%.3f s in the safe state), longest command gap %.3f s\n",
-                  wire_.describe().c_str(), opt_.lockstep ? "lockstep" : opt_.realtime ? "real time" : "wall clock",
+                  wire_.describe().c_str(), pacing_text(),
                   static_cast<long long>(wire_.messages_in()), Wire::kUnit,
                   static_cast<long long>(wire_.messages_out()), static_cast<long long>(rejected),
                   static_cast<long long>(commands_applied_), static_cast<long long>(stale_samples_),
                   static_cast<long long>(timeouts_), static_cast<double>(safe_steps()) * h_s_,
                   static_cast<double>(longest_gap_steps_) * h_s_);
     text += buf;
-    if (opt_.realtime) return;
+    if (opt_.realtime || opt_.event_mode) return;  // no wall time to speak of
     std::snprintf(buf, sizeof buf, "bus timing    %s p50 %.0f us, p99 %.0f us, max %.0f us",
                   opt_.lockstep ? "round trip" : "period error", us(hist.quantile_ns(0.5)),
                   us(hist.quantile_ns(0.99)), us(hist.max_ns()));
@@ -285,7 +285,12 @@ class BusPlant final : public ExternalDriver,
   double samples_per_s() const {
     return commands_applied_ > 1 && exchange_s() > 0.0 ? static_cast<double>(commands_applied_ - 1) / exchange_s() : NAN;
   }
-  const char* pacing() const { return opt_.lockstep ? "lockstep" : opt_.realtime ? "realtime" : "wall_clock"; }
+  const char* pacing() const {
+    return opt_.event_mode ? "fmi_event_mode" : opt_.lockstep ? "lockstep" : opt_.realtime ? "realtime" : "wall_clock";
+  }
+  const char* pacing_text() const {
+    return opt_.event_mode ? "FMI Event Mode" : opt_.lockstep ? "lockstep" : opt_.realtime ? "real time" : "wall clock";
+  }
 
   // The bus faults acting at step n, for the wire; remembered for the timeouts they cause.
   void read_fault_mask(std::int64_t n) {

@@ -38,10 +38,13 @@ struct BusPlantOptions {
   // without one (the command then ages like a late one on a real bus)
   double lockstep_wait_s = 1.0;
   double peer_wait_s = 60.0;  // wall time to wait for an ECU to connect before t = 0
-  // lockstep whose commands come between steps (an LS-BUS FMU, targets/fmu/): start-up sends
-  // sample 0 without waiting; each later sample goes out at the end of the doStep that reached
-  // it (ExternalDriver::send_ahead) and its exchange takes what came in the Event Mode after
-  // it, without waiting (lockstep_wait_s is 0): a command that did not come is a late one
+  // an LS-BUS FMU (targets/fmu/): the commands come between steps, in the importer's Event
+  // Mode. Start-up sends sample 0 without waiting; each later sample goes out at the end of the
+  // doStep that reached it (ExternalDriver::send_ahead), and the exchange there takes what came
+  // in the Event Mode after it, without waiting. Not lockstep: the latest complete fresh command
+  // applies (as on the wall clock, in simulated time), so a bus simulation that delays frames
+  // delays the commands instead of making every one stale; with a direct connection each
+  // command comes in its sample's Event Mode and the run is the lockstep session's.
   bool event_mode = false;
   std::string log_interface = "can0";  // the interface name in bus.log lines
   bool asc_log = false;                // CAN: bus.asc (Vector ASC) too, beside bus.log

@@ -67,7 +67,7 @@ std::size_t put_status(std::span<std::uint8_t> out, std::size_t used, std::uint8
 }
 
 std::size_t put_format_error(std::span<std::uint8_t> out, std::size_t used, std::span<const std::uint8_t> refused) {
-  const std::size_t n = std::min<std::size_t>(refused.size(), 64);
+  const std::size_t n = std::min<std::size_t>(refused.size(), 0xFFFF);  // Data Length is 2 bytes
   std::uint8_t* p = room(out, used, kHeaderBytes + 2 + n);
   if (p == nullptr) return 0;
   header(p, kOpFormatError, kHeaderBytes + 2 + n);
@@ -136,6 +136,7 @@ RxCounts LsBusTerminal::take_rx(std::span<const std::uint8_t> rx) {
   rx_totals_.bus_errors += c.bus_errors;
   rx_totals_.status += c.status;
   rx_totals_.ignored += c.ignored;
+  rx_totals_.not_classic += c.not_classic;
   rx_totals_.malformed += c.malformed;
   if (c.last_status != 0) rx_totals_.last_status = c.last_status;
   counters_.error_frames += c.bus_errors;

@@ -9,6 +9,9 @@
 //     Bus Error     0x31: ID (4) | Error Code (1) | Error Flag (1) | Is Sender (1)  15 bytes
 //     Status        0x41: Status (1: 1 error active, 2 error passive, 3 bus-off)    9 bytes
 //     Format Error  0x01: Data Length (2) | Data (the operation it refuses)       10 + n bytes
+// A Network FMU on a classic-CAN contract: CAN FD and XL Transmit and remote frames are other
+// nodes' business on a mixed bus (valid operations, counted and let be); what is not an
+// operation of the standard at all is answered by a Format Error.
 // Pure functions over byte spans, and LsBusTerminal: a Transport (io/can/transport.hpp) whose
 // sent frames go into a Tx buffer and whose received frames come from an Rx buffer, for an
 // FMU (targets/fmu/) to hand to its importer. Buffers are sized at construction: nothing is
@@ -53,7 +56,8 @@ std::size_t put_transmit(std::span<std::uint8_t> out, std::size_t used, const Fr
 std::size_t put_bus_error(std::span<std::uint8_t> out, std::size_t used, std::uint32_t id, std::uint8_t code,
                           std::uint8_t flag, bool is_sender);
 std::size_t put_status(std::span<std::uint8_t> out, std::size_t used, std::uint8_t status);
-// A Format Error carrying (up to 64 bytes of) the operation it refuses.
+// A Format Error carrying the operation it refuses (as much of it as the standard's 2-byte Data
+// Length holds).
 std::size_t put_format_error(std::span<std::uint8_t> out, std::size_t used, std::span<const std::uint8_t> refused);
 
 // What one Rx buffer held.
@@ -61,8 +65,9 @@ struct RxCounts {
   std::int64_t frames = 0;        // CAN Transmit operations with a classic frame (0..8 bytes)
   std::int64_t bus_errors = 0;    // Bus Error operations
   std::int64_t status = 0;        // Status operations
-  std::int64_t ignored = 0;       // well-formed operations a Network FMU may ignore (Confirm, Configuration, ...)
-  std::int64_t malformed = 0;     // operations that are not LS-BUS CAN (a length that does not add up, CAN FD/XL)
+  std::int64_t ignored = 0;       // well-formed operations a Network FMU may let be (Confirm, Configuration, ...)
+  std::int64_t not_classic = 0;   // CAN FD and XL Transmit, remote frames: valid, not this contract's
+  std::int64_t malformed = 0;     // not LS-BUS CAN (a length that does not add up, an unknown OP code)
   std::uint8_t last_status = 0;   // the last Status operation's value (0: none)
 };
 
@@ -131,21 +136,27 @@ RxCounts parse(std::span<const std::uint8_t> in, OnFrame&& on_frame, OnMalformed
     switch (op) {
       case kOpCanTransmit: {
         const std::size_t n = length >= kTransmitBytes ? read_u16(p + 14) : 0;
-        ok = length >= kTransmitBytes && length == kTransmitBytes + n && n <= 8 && p[12] <= 1 && p[13] <= 1;
-        if (ok) {
-          Frame f;
-          f.id = read_u32(p + 8);
-          f.extended = p[12] == 1;
-          f.len = static_cast<std::uint8_t>(n);
-          for (std::size_t i = 0; i < n; ++i) f.data[i] = p[kTransmitBytes + i];
-          ok = f.id <= (f.extended ? kMaxExtendedId : kMaxStandardId) && p[13] == 0;  // no remote frames here
-          if (ok) {
-            ++c.frames;
-            on_frame(f);
-          }
+        ok = length >= kTransmitBytes && length == kTransmitBytes + n && p[12] <= 1 && p[13] <= 1;
+        if (!ok) break;
+        Frame f;
+        f.id = read_u32(p + 8);
+        f.extended = p[12] == 1;
+        ok = f.id <= (f.extended ? kMaxExtendedId : kMaxStandardId);
+        if (!ok) break;
+        if (p[13] == 1 || n > 8) {  // a remote frame, or more than 8 bytes: not classic CAN data
+          ++c.not_classic;
+          break;
         }
+        f.len = static_cast<std::uint8_t>(n);
+        for (std::size_t i = 0; i < n; ++i) f.data[i] = p[kTransmitBytes + i];
+        ++c.frames;
+        on_frame(f);
         break;
       }
+      case kOpCanFdTransmit:
+      case kOpCanXlTransmit:
+        ++c.not_classic;  // another node's, on a mixed bus: its layout is not read here
+        break;
       case kOpBusError:
         ok = length == kBusErrorBytes;
         if (ok) ++c.bus_errors;
@@ -164,7 +175,7 @@ RxCounts parse(std::span<const std::uint8_t> in, OnFrame&& on_frame, OnMalformed
       case kOpWakeup:
         ++c.ignored;  // a Network FMU that does not wait for bus notifications may let them be
         break;
-      default:  // CAN FD and XL (a classic-CAN contract), or not a CAN operation at all
+      default:  // not an operation of the standard
         ok = false;
         break;
     }

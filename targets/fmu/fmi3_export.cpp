@@ -307,10 +307,11 @@ fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueRefere
 }
 
 fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance) {
-  return refuse(instance, "fmi3EnterConfigurationMode: this FMU has no structural parameter");
+  return refuse(instance, "fmi3EnterConfigurationMode: not provided (an LS-BUS FMU's structural parameter, Can_BusNotifications, "
+                          "is set before fmi3EnterInitializationMode)");
 }
 fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance) {
-  return refuse(instance, "fmi3ExitConfigurationMode: this FMU has no structural parameter");
+  return refuse(instance, "fmi3ExitConfigurationMode: not provided (no Configuration Mode)");
 }
 
 fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference[], size_t, fmi3Float64[],
@@ -350,12 +351,15 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean* discrete
                                     fmi3Boolean* valuesOfContinuousStatesChanged, fmi3Boolean* nextEventTimeDefined,
                                     fmi3Float64* nextEventTime) {
   return guarded(instance, [&](Fmu3& f) {
-    const bool done = f.instance->update_discrete_states();
-    // one update takes all that came: nothing left for another; the next event is a doStep's
+    bool need = false;
+    const bool done = f.instance->update_discrete_states(need);
+    // one update takes all that came; it asks for another when it sent operations (Tx_Clock
+    // ticked: the importer hands them on); the next event is a doStep's
     for (fmi3Boolean* b : {discreteStatesNeedUpdate, terminateSimulation, nominalsOfContinuousStatesChanged,
                            valuesOfContinuousStatesChanged, nextEventTimeDefined}) {
       if (b != nullptr) *b = fmi3False;
     }
+    if (discreteStatesNeedUpdate != nullptr) *discreteStatesNeedUpdate = need ? fmi3True : fmi3False;
     if (nextEventTime != nullptr) *nextEventTime = 0.0;
     return ok(done);
   });

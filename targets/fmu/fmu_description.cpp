@@ -175,6 +175,16 @@ void add_bus_terminal(Description& d, std::uint32_t& vr) {
     v.index = m;
     d.variables.push_back(v);
   }
+  Variable n;
+  n.vr = vr++;
+  n.name = kBusNotificationsName;
+  n.description = "the importer's bus sends Confirm, Arbitration Lost and Bus Error operations (set before "
+                  "initialization); this FMU never waits for them, so either value is right";
+  n.causality = Causality::kStructuralParameter;
+  n.type = Type::kBoolean;
+  n.source = Source::kBus;
+  n.index = kBusNotifications;
+  d.variables.push_back(n);
 }
 
 }  // namespace
@@ -261,7 +271,7 @@ std::string model_description_3(const Description& d, const std::string& model_i
        "\"/>\n";
   x += "  <ModelVariables>\n";
   for (const Variable& v : d.variables) {
-    if (v.source == Source::kBus) {
+    if (v.source == Source::kBus && v.index != kBusNotifications) {
       const std::uint32_t clock = v.vr + 1;  // Rx_Data's clock follows it, as Tx_Data's does
       if (v.type == Type::kBinary) {
         x += "    <Binary name=\"" + xml_escape(v.name) + "\" valueReference=\"" + std::to_string(v.vr) +
@@ -298,6 +308,10 @@ std::string model_description_3(const Description& d, const std::string& model_i
       case Causality::kParameter:
         x += " causality=\"parameter\" variability=\"fixed\" start=\"" + number(v.start) + "\"";
         break;
+      case Causality::kStructuralParameter:
+        x += std::string(" causality=\"structuralParameter\" variability=\"fixed\" start=\"") +
+             (v.start != 0.0 ? "true" : "false") + "\"";
+        break;
     }
     if (!v.unit.empty() && !boolean) x += " unit=\"" + xml_escape(v.unit) + "\"";
     x += "/>\n";
@@ -317,7 +331,7 @@ std::string terminals_and_icons(const Description& d) {
        "\" terminalKind=\"org.fmi-ls-bus.network-terminal\" matchingRule=\"org.fmi-ls-bus.transceiver\""
        " description=\"CAN: the frames of ehpt's contract (extra/org.fmi-standard.fmi-ls-bus/ehpt.dbc)\">\n";
   for (const Variable& v : d.variables) {
-    if (v.source != Source::kBus) continue;
+    if (v.source != Source::kBus || v.index == kBusNotifications) continue;
     x += "      <TerminalMemberVariable variableName=\"" + xml_escape(v.name) + "\" memberName=\"" +
          xml_escape(v.name.substr(v.name.find('.') + 1)) + "\" variableKind=\"signal\"/>\n";
   }

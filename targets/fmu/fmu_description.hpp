@@ -14,7 +14,7 @@
 
 namespace ehpt::fmu {
 
-enum class Causality { kIndependent, kOutput, kInput, kParameter };
+enum class Causality { kIndependent, kOutput, kInput, kParameter, kStructuralParameter };
 enum class Type { kFloat64, kBoolean, kBinary, kClock };
 // Where a variable's value comes from: the time, a plant signal (every step), a field of the
 // sensor message the ECU reads at its samples, or (an input) a field of the command message.
@@ -33,8 +33,11 @@ enum class EcuMode { kBuiltin, kNone, kBus };
 // scenario's built-in ECU alone on a CAN terminal, as `ehpt ecu` is on a bus.
 enum class Role { kPlant, kEcu };
 
-// The members of an FMI-LS-BUS bus terminal (FMI-LS-BUS §4.3), in value-reference order.
-enum BusMember { kRxData = 0, kRxClock = 1, kTxData = 2, kTxClock = 3 };
+// The members of an FMI-LS-BUS bus terminal (FMI-LS-BUS §4.3), in value-reference order, and
+// the CAN network parameter every Network FMU declares (§4.4.1): whether it relies on Confirm,
+// Arbitration Lost and Bus Error operations (this FMU never does; either value is taken).
+enum BusMember { kRxData = 0, kRxClock = 1, kTxData = 2, kTxClock = 3, kBusNotifications = 4 };
+inline constexpr const char* kBusNotificationsName = "org.fmi_standard.fmi_ls_bus.Can_BusNotifications";
 inline constexpr const char* kBusTerminal = "CAN";  // the terminal's name, the variables' prefix
 inline constexpr std::size_t kBusBufferBytes = 4096;  // Tx_Data and Rx_Data at most (maxSize)
 

@@ -225,6 +225,7 @@ bool Instance::exit_initialization() {
   sim_ = hil::make_simulation(sc_, opt);
   if (!sim_) return fail(sc_.name + ": the simulation cannot be built");
   if (has_bus() && !make_bus(name(Call::kExitInitialization))) return false;
+  if (has_bus()) publish_tx();  // sample 0: Tx_Clock ticks in the Event Mode that follows
   refresh_outputs();
   state_ = has_bus() ? State::kEvent : State::kStep;
   return true;
@@ -244,7 +245,6 @@ bool Instance::make_bus(const char* call) {
   std::optional<hil::Binding> binding = hil::default_binding(hil::bus_family(sc_), sc_.ecu_timing.period_s, errors);
   if (!binding) return fail(std::string(call) + ": " + (errors.empty() ? std::string("no binding") : errors.front()));
   hil::BusPlantOptions opt;
-  opt.lockstep = true;
   opt.event_mode = true;  // the command of a sample comes in the Event Mode after the doStep that reached it
   opt.lockstep_wait_s = 0.0;
   opt.peer_wait_s = 0.0;
@@ -290,6 +290,7 @@ bool Instance::do_step(double current_s, double step_s, double& reached_s, bool&
   if (description_.role == Role::kEcu) {  // the ECU's time: it acts in Event Mode only
     ecu_step_ += n;
     reached_s = static_cast<double>(ecu_step_) * h;
+    event = publish_tx();  // what it has not handed over yet (an importer that skipped a tick)
     return true;
   }
   if (has_bus()) {  // a sample's frames go out when a doStep ends on it: no doStep may pass one
@@ -312,7 +313,7 @@ bool Instance::do_step(double current_s, double step_s, double& reached_s, bool&
     left -= k;
   }
   if (bus_plant_) bus_plant_->send_ahead();  // it stopped at a sample: its frames go out now
-  event = terminal_ && !terminal_->tx().empty();
+  event = publish_tx();
   refresh_outputs();
   reached_s = sim_->time_s();
   if (left > 0) {  // the plant stopped on a fault (FaultPolicy::kStop), as ehpt run does
@@ -374,7 +375,12 @@ bool Instance::set_values(const char* call, Type type, const std::uint32_t* vrs,
       return fail(std::string(call) + ": " + v.name + " is a fixed parameter: set it before " +
                   name(Call::kExitInitialization));
     }
-    if (v.causality != Causality::kInput && v.causality != Causality::kParameter) {
+    if (v.causality == Causality::kStructuralParameter && state_ != State::kInstantiated) {
+      return fail(std::string(call) + ": " + v.name + " is a structural parameter: set it before " +
+                  name(Call::kEnterInitialization));
+    }
+    if (v.causality != Causality::kInput && v.causality != Causality::kParameter &&
+        v.causality != Causality::kStructuralParameter) {
       return fail(std::string(call) + ": " + v.name + " is an output" +
                   (ecu_ == EcuMode::kBuiltin ? " (this FMU has no inputs: its built-in ECU drives the plant; "
                                                "`ehpt fmu --ecu none` makes the command fields inputs)"
@@ -626,7 +632,8 @@ bool Instance::reset() {
   ecu_node_.reset();
   sim_.reset();
   terminal_.reset();
-  rx_clock_ = rx_came_ = degraded_ = false;
+  rx_clock_ = rx_came_ = degraded_ = tx_clock_ = false;
+  tx_out_.clear();
   ecu_step_ = 0;
   std::vector<std::string> errors;
   hil::Scenario sc;
@@ -658,22 +665,51 @@ bool Instance::enter_step_mode() {
   if (!has_bus()) return fail("fmi3EnterStepMode: this FMU has no Event Mode (Step Mode follows initialization)");
   if (!in(State::kEvent, "fmi3EnterStepMode")) return false;
   rx_clock_ = false;  // an input clock ticks for one Event Mode
+  // a sample whose command did not come in the Event Mode: the plant goes on without it (a
+  // late command), as the next doStep would, so the outputs here are those of this point
+  if (sim_ && !sim_->finished() && sim_->exchange_now()) refresh_outputs();
   state_ = State::kStep;
   return true;
 }
 
-bool Instance::update_discrete_states() {
+// Tx_Data as FMI-LS-BUS's triggered Tx_Clock hands it over: the operations sent since the last
+// tick become its value (after what an importer has not fetched yet, if it skipped a tick), and
+// Tx_Clock is active until fmi3GetClock reports it, once. The value stays the same for every
+// fmi3GetBinary until the next tick, so an importer may read it once per connection.
+bool Instance::publish_tx() {
+  if (!terminal_) return false;
+  const std::span<const std::uint8_t> tx = terminal_->tx();
+  if (tx.empty()) return tx_clock_;
+  if (!tx_clock_) tx_out_.clear();  // the last value was fetched: a new one
+  if (tx_out_.size() + tx.size() > tx_out_.capacity()) {
+    ++tx_dropped_;
+    log_(kWarning, "logStatusWarning",
+         "CAN.Tx_Data: " + std::to_string(tx.size()) + " bytes of operations dropped: the importer did not fetch the " +
+             std::to_string(tx_out_.size()) + " before them (Tx_Clock ticked and fmi3GetClock never reported it)");
+  } else {
+    tx_out_.insert(tx_out_.end(), tx.begin(), tx.end());  // within its capacity: no allocation
+  }
+  terminal_->clear_tx();
+  tx_clock_ = true;
+  return true;
+}
+
+bool Instance::update_discrete_states(bool& need_update) {
+  need_update = false;
   if (!has_bus()) return fail("fmi3UpdateDiscreteStates: this FMU has no Event Mode");
   if (!in(State::kEvent, "fmi3UpdateDiscreteStates")) return false;
   if (!rx_came_) return true;
   rx_came_ = false;
   if (ecu_node_) {
     ecu_node_->poll();  // each complete sample answered: its command frames in Tx_Data
-    return true;
+  } else {
+    // the command of the sample the plant stopped at: applied, and the outputs there with it
+    if (!sim_->finished()) sim_->exchange_now();
+    refresh_outputs();
   }
-  // the command of the sample the plant stopped at: applied, and the outputs there with it
-  if (!sim_->finished()) sim_->exchange_now();
-  refresh_outputs();
+  // new operations (the ECU's commands, a Format Error): Tx_Clock ticks, and the importer is
+  // asked to go round once more, to hand them on
+  need_update = publish_tx();
   return true;
 }
 
@@ -696,7 +732,12 @@ bool Instance::get_clock(const std::uint32_t* vrs, std::size_t n, bool* active) 
   for (std::size_t i = 0; i < n; ++i) {
     const Variable* v = bus_variable("fmi3GetClock", vrs[i], Type::kClock);
     if (v == nullptr) return false;
-    active[i] = v->index == kTxClock ? terminal_ && !terminal_->tx().empty() : rx_clock_;
+    if (v->index == kTxClock) {
+      active[i] = tx_clock_;
+      tx_clock_ = false;  // reported once per tick (its value, Tx_Data, stays until the next)
+    } else {
+      active[i] = rx_clock_;
+    }
   }
   return true;
 }
@@ -721,12 +762,7 @@ bool Instance::get_binary(const std::uint32_t* vrs, std::size_t n, std::size_t* 
     const Variable* v = bus_variable("fmi3GetBinary", vrs[i], Type::kBinary);
     if (v == nullptr) return false;
     if (v->index != kTxData) return fail("fmi3GetBinary: " + v->name + " is an input");
-    if (terminal_) {  // handed over once: what the next doStep or update sends comes in the next call
-      const std::span<const std::uint8_t> tx = terminal_->tx();
-      tx_out_.assign(tx.begin(), tx.end());  // within its capacity (the terminal's): no allocation
-      terminal_->clear_tx();
-    }
-    sizes[i] = tx_out_.size();
+    sizes[i] = tx_out_.size();  // the last tick's operations (publish_tx), the same at every call
     values[i] = tx_out_.data();
   }
   return true;

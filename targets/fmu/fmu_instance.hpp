@@ -18,9 +18,10 @@
 //
 // With a bus terminal the FMU has FMI 3.0's Event Mode (FMI-LS-BUS): the plant sends a
 // sample's sensor frames (Tx_Data, Tx_Clock ticking) at the end of the doStep that reached the
-// ECU sample, and applies the command frames that come in the Event Mode after it (Rx_Data,
-// Rx_Clock), as `ehpt plant --lockstep` does over a bus (hil/bus/bus_plant.hpp), bit for bit;
-// the ECU FMU answers each complete sample in its Event Mode, as `ehpt ecu` does.
+// ECU sample, and applies the latest command that has come (Rx_Data, Rx_Clock), with the bus
+// plant's timeout and safe state (hil/bus/bus_plant.hpp: event_mode); the ECU FMU answers each
+// complete sample in its Event Mode, as `ehpt ecu` does. Connected directly, each command comes
+// in its sample's Event Mode: the lockstep bus session, bit for bit.
 
 #include <cstdint>
 #include <memory>
@@ -99,11 +100,13 @@ class Instance {
   // its command, the ECU: the samples it answers).
   bool has_bus() const { return description_.ecu == EcuMode::kBus; }
   bool enter_event_mode();
-  bool update_discrete_states();
+  // need_update: it sent operations (Tx_Clock ticked): the importer should hand them on and
+  // call it again (discreteStatesNeedUpdate)
+  bool update_discrete_states(bool& need_update);
   bool enter_step_mode();
   bool get_clock(const std::uint32_t* vrs, std::size_t n, bool* active);
   bool set_clock(const std::uint32_t* vrs, std::size_t n, const bool* active);
-  // Tx_Data's operations, handed over once (valid until the next call); Rx_Data's taken in
+  // Tx_Data: the operations of the last tick (valid and unchanged until the next tick); Rx_Data's taken in
   bool get_binary(const std::uint32_t* vrs, std::size_t n, std::size_t* sizes, const std::uint8_t** values,
                   std::size_t n_values);
   bool set_binary(const std::uint32_t* vrs, std::size_t n, const std::size_t* sizes, const std::uint8_t* const* values,
@@ -141,6 +144,8 @@ class Instance {
            Fmi fmi, const std::vector<std::pair<std::string, double>>& numbers);
   // the bus terminal's side: the plant's bus driver or the ECU, built when initialization ends
   bool make_bus(const char* call);
+  // the terminal's new operations become Tx_Data's value and Tx_Clock ticks; true if it ticked
+  bool publish_tx();
   // the bus variable a value reference names, or fails (call's message)
   const Variable* bus_variable(const char* call, std::uint32_t vr, Type type);
   // the scenario with the manifest's overrides, the importer's stop time and its parameters
@@ -186,7 +191,9 @@ class Instance {
   // the bus terminal (ecu kBus): its Tx_Data as handed to the importer, whether Rx_Data came
   // since the last update, the plant's bus driver (hil/bus/bus_plant.hpp) or the ECU
   std::unique_ptr<io::can::ls_bus::LsBusTerminal> terminal_;
-  std::vector<std::uint8_t> tx_out_;
+  std::vector<std::uint8_t> tx_out_;  // Tx_Data's value (capacity kBusBufferBytes, reserved)
+  bool tx_clock_ = false;             // Tx_Clock ticked and fmi3GetClock has not reported it yet
+  std::int64_t tx_dropped_ = 0;       // ticks whose operations did not fit behind unfetched ones
   bool rx_clock_ = false, rx_came_ = false;
   std::unique_ptr<hil::ExternalDriver> bus_plant_;
   std::unique_ptr<hil::CanEcuNode> ecu_node_;

@@ -184,12 +184,46 @@ struct Node {
 
 std::string last_log(const Fmi3Fmu& fmu) { return fmu.log.empty() ? std::string() : fmu.log.back(); }
 
+// Operations of node 1 on their way to node 0 (delay_events > 0): the bytes, and the Event Mode
+// at which they arrive.
+struct InFlight {
+  std::vector<std::uint8_t> bytes;
+  std::int64_t due_event = 0;
+};
+
+// hands bytes to a node's Rx (its Rx_Clock ticking)
+bool deliver(Node& dst, const std::uint8_t* data, size_t size, BusRun& run, std::string& error) {
+  const fmi3ValueReference rx_clock = dst.fmu->bus_vr.at("CAN.Rx_Clock"), rx_data = dst.fmu->bus_vr.at("CAN.Rx_Data");
+  const fmi3Clock active = fmi3ClockActive;
+  const fmi3Binary value = data;
+  if (dst.fmu->set_clock(dst.instance, &rx_clock, 1, &active) != fmi3OK ||
+      dst.fmu->set_binary(dst.instance, &rx_data, 1, &size, &value, 1) != fmi3OK) {
+    error = "fmi3SetClock/SetBinary(Rx): " + last_log(*dst.fmu);
+    return false;
+  }
+  ++run.transfers;
+  run.bytes += static_cast<std::int64_t>(size);
+  return true;
+}
+
 // One point's Event Mode (both FMUs in it): Tx to Rx while a Tx_Clock ticks, each move followed by
 // fmi3UpdateDiscreteStates of every FMU, until a round moves nothing (at most 16 rounds).
-bool event_iteration(std::vector<Node>& nodes, BusRun& run, std::string& error) {
+bool event_iteration(std::vector<Node>& nodes, BusRun& run, std::string& error, int delay_events,
+                     std::vector<InFlight>& in_flight) {
   ++run.events;
   for (int round = 0; round < 16; ++round) {
     bool moved = false;
+    if (round == 0) {  // what a delaying bus carried here
+      for (auto it = in_flight.begin(); it != in_flight.end();) {
+        if (it->due_event > run.events) {
+          ++it;
+          continue;
+        }
+        if (!deliver(nodes[0], it->bytes.data(), it->bytes.size(), run, error)) return false;
+        it = in_flight.erase(it);
+        moved = true;
+      }
+    }
     for (std::size_t i = 0; i < nodes.size(); ++i) {
       Fmi3Fmu& src = *nodes[i].fmu;
       const fmi3ValueReference tx_clock = src.bus_vr.at("CAN.Tx_Clock"), tx_data = src.bus_vr.at("CAN.Tx_Data");
@@ -219,16 +253,11 @@ bool event_iteration(std::vector<Node>& nodes, BusRun& run, std::string& error) 
       if (size == 0) continue;
       for (std::size_t j = 0; j < nodes.size(); ++j) {  // direct connection: every other node hears it
         if (j == i) continue;
-        Fmi3Fmu& dst = *nodes[j].fmu;
-        const fmi3ValueReference rx_clock = dst.bus_vr.at("CAN.Rx_Clock"), rx_data = dst.bus_vr.at("CAN.Rx_Data");
-        const fmi3Clock active = fmi3ClockActive;
-        if (dst.set_clock(nodes[j].instance, &rx_clock, 1, &active) != fmi3OK ||
-            dst.set_binary(nodes[j].instance, &rx_data, 1, &size, &data, 1) != fmi3OK) {
-          error = "fmi3SetClock/SetBinary(Rx): " + last_log(dst);
-          return false;
+        if (i == 1 && delay_events > 0) {  // on its way
+          in_flight.push_back({std::vector<std::uint8_t>(data, data + size), run.events + delay_events});
+          continue;
         }
-        ++run.transfers;
-        run.bytes += static_cast<std::int64_t>(size);
+        if (!deliver(nodes[j], data, size, run, error)) return false;
       }
       moved = true;
     }
@@ -249,8 +278,9 @@ bool event_iteration(std::vector<Node>& nodes, BusRun& run, std::string& error) 
 }  // namespace
 
 bool run_bus_pair(Fmi3Fmu& a, fmi3Instance ia, Fmi3Fmu* b, fmi3Instance ib, std::int64_t k, double stop_s,
-                  std::vector<std::vector<double>>& rows, BusRun& run, std::string& error) {
+                  std::vector<std::vector<double>>& rows, BusRun& run, std::string& error, int delay_events) {
   rows.clear();
+  std::vector<InFlight> in_flight;
   std::vector<Node> nodes{{&a, ia}};
   if (b != nullptr) nodes.push_back({b, ib});
   for (Node& n : nodes) {
@@ -261,7 +291,7 @@ bool run_bus_pair(Fmi3Fmu& a, fmi3Instance ia, Fmi3Fmu* b, fmi3Instance ib, std:
     }
   }
   // FMI 3.0 co-simulation with eventModeUsed: Event Mode follows initialization (sample 0)
-  if (!event_iteration(nodes, run, error)) return false;
+  if (!event_iteration(nodes, run, error, delay_events, in_flight)) return false;
   for (Node& n : nodes) {
     if (n.fmu->enter_step_mode(n.instance) != fmi3OK) {
       error = "fmi3EnterStepMode: " + last_log(*n.fmu);
@@ -293,7 +323,7 @@ bool run_bus_pair(Fmi3Fmu& a, fmi3Instance ia, Fmi3Fmu* b, fmi3Instance ib, std:
           return false;
         }
       }
-      if (!event_iteration(nodes, run, error)) return false;
+      if (!event_iteration(nodes, run, error, delay_events, in_flight)) return false;
       for (Node& node : nodes) {
         if (node.fmu->enter_step_mode(node.instance) != fmi3OK) {
           error = "fmi3EnterStepMode: " + last_log(*node.fmu);

@@ -116,8 +116,10 @@ struct BusRun {
   std::map<std::uint32_t, std::int64_t> plant_ops;  // the plant's Tx operations by OP code
   std::vector<std::uint8_t> plant_status;           // the Status values the plant sent, in order
 };
+// delay_events: b's operations reach a that many Event Modes later (a bus simulation that
+// takes time to carry them; 0: a direct connection).
 bool run_bus_pair(Fmi3Fmu& a, fmi3Instance ia, Fmi3Fmu* b, fmi3Instance ib, std::int64_t k, double stop_s,
-                  std::vector<std::vector<double>>& rows, BusRun& run, std::string& error);
+                  std::vector<std::vector<double>>& rows, BusRun& run, std::string& error, int delay_events = 0);
 // The same through FMI 2.0 (the time is the importer's own communication point).
 bool run_fmu2(Fmi3Fmu& fmu, fmi2Component instance, std::int64_t k, double stop_s, std::vector<std::vector<double>>& rows,
               std::string& error);

@@ -135,6 +135,46 @@ TEST_F(LsBus, PlantAndEcuFmusConnectedTxToRxAreTheLockstepBusSessionBitForBit) {
   EXPECT_GT(ref_->at("speed_m_s").back(), 3.0);  // the car moved: not a run of zeros
 }
 
+// A bus simulation between them that takes one ECU period to carry the ECU's frames: the plant
+// applies each command when it comes (the latest fresh one), one period late, and drives on,
+// close to the direct run but not equal to it; one that takes 4 periods (past the 3-period
+// timeout) leaves it in its safe state, and terminate says so (Warning).
+TEST_F(LsBus, ABusThatDelaysTheCommandsDelaysThemAndOnePastTheTimeoutIsSaid) {
+  const auto run_with_delay = [&](int delay, std::vector<std::vector<double>>& rows, BusRun& run, Fmi3Fmu& plant) {
+    Fmi3Fmu ecu;
+    std::string error;
+    ASSERT_TRUE(plant.open(*dir_ + "/plant.fmu", error)) << error;
+    ASSERT_TRUE(ecu.open(*dir_ + "/ecu.fmu", error)) << error;
+    fmi3Instance p = plant.make_instance("plant", nullptr, true), e = ecu.make_instance("ecu", nullptr, true);
+    ASSERT_TRUE(run_bus_pair(plant, p, &ecu, e, 10, kStop_s, rows, run, error, delay)) << error;
+    plant.free_instance(p);
+    ecu.free_instance(e);
+  };
+  std::vector<std::vector<double>> rows;
+  BusRun run;
+  Fmi3Fmu plant;
+  run_with_delay(1, rows, run, plant);
+  ASSERT_EQ(rows.size(), 2000u);
+  const std::size_t speed = static_cast<std::size_t>(
+      std::find(plant.output_names.begin(), plant.output_names.end(), "speed_m_s") - plant.output_names.begin()) + 1;
+  const double want = ref_->at("speed_m_s")[20000];
+  EXPECT_GT(want, 3.0);
+  EXPECT_NEAR(rows.back()[speed], want, 0.05) << "one period late, the car still follows";
+  std::string first;
+  EXPECT_GT(mismatches(plant, rows, *ref_, 10, first), 0) << "but not the direct run's";
+  EXPECT_EQ(run.terminate_status, fmi3OK) << (plant.log.empty() ? "" : plant.log.back());
+
+  std::vector<std::vector<double>> late_rows;
+  BusRun late;
+  Fmi3Fmu late_plant;
+  run_with_delay(4, late_rows, late, late_plant);
+  EXPECT_EQ(late.terminate_status, fmi3Warning);
+  bool said = false;
+  for (const std::string& l : late_plant.log) said = said || l.find("timed out") != std::string::npos;
+  EXPECT_TRUE(said) << "the timeouts are in the log";
+  EXPECT_LT(late_rows.back()[speed], 0.5 * want) << "the safe state: the car does not follow";
+}
+
 // Sample 0's Tx_Data: a CAN Transmit operation for each sensor frame of ehpt's DBC, nothing else.
 TEST_F(LsBus, ThePlantSendsTheContractsSensorFramesAsCanTransmitOperations) {
   Fmi3Fmu plant, ecu;
@@ -359,6 +399,29 @@ TEST_F(LsBus, BusFaultsActOnTheFramesAndErrorFramesAreBusErrorAndStatusOperation
   EXPECT_FALSE(fs::exists(*dir_ + "/badf.fmu"));
 }
 
+// At a sample point the outputs after the Event Mode are those of that point, also when no
+// command came (the plant alone): the cycle's wanted speed, which no ECU changes, is `ehpt
+// run`'s at every point (outputs left from the step before would be 1 ms behind once NEDC
+// moves, from 11 s).
+TEST_F(LsBus, OutputsAtASamplePointAreThatPointsEvenWithoutACommand) {
+  Fmi3Fmu plant;
+  std::string error;
+  ASSERT_TRUE(plant.open(*dir_ + "/plant.fmu", error)) << error;
+  std::vector<std::vector<double>> rows;
+  BusRun run;
+  fmi3Instance a = plant.make_instance("a", nullptr, true);
+  ASSERT_TRUE(run_bus_pair(plant, a, nullptr, nullptr, 10, 12.0, rows, run, error)) << error;
+  plant.free_instance(a);
+  ASSERT_EQ(rows.size(), 1200u);
+  const std::size_t j = static_cast<std::size_t>(
+      std::find(plant.output_names.begin(), plant.output_names.end(), "speed_ref_m_s") - plant.output_names.begin()) + 1;
+  ASSERT_LT(j, rows.front().size());
+  int differ = 0;
+  for (std::size_t r = 0; r < rows.size(); ++r) differ += same_bits(rows[r][j], ref_->at("speed_ref_m_s")[(r + 1) * 10]) ? 0 : 1;
+  EXPECT_EQ(differ, 0);
+  EXPECT_GT(rows.back()[j], 0.5) << "NEDC moves by 12 s";
+}
+
 TEST_F(LsBus, WrongUseIsAnErrorWithAMessage) {
   Fmi3Fmu plant;
   std::string error;
@@ -387,19 +450,39 @@ TEST_F(LsBus, WrongUseIsAnErrorWithAMessage) {
   p = plant.make_instance("p2", nullptr, true);
   ASSERT_EQ(plant.enter_initialization(p, fmi3False, 0.0, 0.0, fmi3True, kStop_s), fmi3OK);
   ASSERT_EQ(plant.exit_initialization(p), fmi3OK);
-  // Rx_Data that is not LS-BUS: a warning, and a Format Error operation back in Tx_Data
   const fmi3ValueReference rx = plant.bus_vr.at("CAN.Rx_Data"), tx = plant.bus_vr.at("CAN.Tx_Data");
+  const fmi3ValueReference tx_clock = plant.bus_vr.at("CAN.Tx_Clock");
+  // Tx_Clock reports a tick once; Tx_Data keeps its value for every read until the next tick
+  fmi3Clock ticked = fmi3ClockInactive;
+  ASSERT_EQ(plant.get_clock(p, &tx_clock, 1, &ticked), fmi3OK);
+  EXPECT_EQ(ticked, fmi3ClockActive) << "sample 0";
+  ASSERT_EQ(plant.get_clock(p, &tx_clock, 1, &ticked), fmi3OK);
+  EXPECT_EQ(ticked, fmi3ClockInactive) << "once per tick";
+  size_t size = 0, size2 = 0;
+  fmi3Binary data = nullptr, data2 = nullptr;
+  ASSERT_EQ(plant.get_binary(p, &tx, 1, &size, &data, 1), fmi3OK);
+  const std::vector<std::uint8_t> sample0(data, data + size);
+  ASSERT_EQ(plant.get_binary(p, &tx, 1, &size2, &data2, 1), fmi3OK);
+  EXPECT_EQ(std::vector<std::uint8_t>(data2, data2 + size2), sample0) << "a second read (another connection) gets the same";
+  EXPECT_EQ(size, 7u * (16 + 8)) << "PlantStatus and PsdSensors1..6";
+  // Rx_Data that is not LS-BUS: a warning, and a Format Error operation back in Tx_Data, with
+  // Tx_Clock ticking and discreteStatesNeedUpdate asking the importer to hand it on
   const std::uint8_t junk[] = {0xDE, 0xAD};
   const fmi3Binary junk_ptr = junk;
   const size_t junk_size = sizeof junk;
+  const fmi3ValueReference rx_clock = plant.bus_vr.at("CAN.Rx_Clock");
+  const fmi3Clock active = fmi3ClockActive;
+  EXPECT_EQ(plant.set_clock(p, &rx_clock, 1, &active), fmi3OK);
   EXPECT_EQ(plant.set_binary(p, &rx, 1, &junk_size, &junk_ptr, 1), fmi3OK);
   EXPECT_TRUE(said("not FMI-LS-BUS CAN"));
-  size_t size = 0;
-  fmi3Binary data = nullptr;
+  fmi3Boolean need = fmi3False, t1, t2, t3, t4;
+  fmi3Float64 next = 0.0;
+  ASSERT_EQ(plant.update_discrete_states(p, &need, &t1, &t2, &t3, &t4, &next), fmi3OK);
+  EXPECT_EQ(need, fmi3True);
+  ASSERT_EQ(plant.get_clock(p, &tx_clock, 1, &ticked), fmi3OK);
+  EXPECT_EQ(ticked, fmi3ClockActive);
   ASSERT_EQ(plant.get_binary(p, &tx, 1, &size, &data, 1), fmi3OK);
   bool format_error = false;
-  io::can::ls_bus::parse(std::span<const std::uint8_t>(data, size), [](const io::can::Frame&) {},
-                         [](std::span<const std::uint8_t>) {});
   for (std::size_t at = 0; at + 8 <= size;) {
     const std::uint32_t op = io::can::ls_bus::read_u32(data + at), len = io::can::ls_bus::read_u32(data + at + 4);
     format_error = format_error || op == io::can::ls_bus::kOpFormatError;
@@ -430,6 +513,19 @@ TEST_F(LsBus, WrongUseIsAnErrorWithAMessage) {
   ASSERT_EQ(plant.enter_step_mode(p), fmi3OK);
   EXPECT_EQ(plant.do_step(p, 0.0, 0.02, fmi3True, &event, &terminate, &early, &last), fmi3Error);
   EXPECT_TRUE(said("passes the ECU sample at 0.01 s"));
+  plant.free_instance(p);
+
+  // the CAN network parameter: a structural parameter, set before initialization, not after
+  p = plant.make_instance("p6", nullptr, true);
+  const fmi3ValueReference notify = plant.boolean_vr.at("org.fmi_standard.fmi_ls_bus.Can_BusNotifications");
+  const fmi3Boolean yes = fmi3True;
+  EXPECT_EQ(plant.set_boolean(p, &notify, 1, &yes, 1), fmi3OK);
+  fmi3Boolean got = fmi3False;
+  EXPECT_EQ(plant.get_boolean(p, &notify, 1, &got, 1), fmi3OK);
+  EXPECT_EQ(got, fmi3True);
+  ASSERT_EQ(plant.enter_initialization(p, fmi3False, 0.0, 0.0, fmi3True, kStop_s), fmi3OK);
+  EXPECT_EQ(plant.set_boolean(p, &notify, 1, &yes, 1), fmi3Error);
+  EXPECT_TRUE(said("is a structural parameter: set it before fmi3EnterInitializationMode"));
   plant.free_instance(p);
 
   // a saved state would not hold the bus session: refused, said

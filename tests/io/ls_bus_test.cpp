@@ -97,25 +97,35 @@ TEST(LsBusCodec, MalformedOperationsAreCountedNeverRead) {
   // a CAN Transmit whose Data Length disagrees with its Total Length
   EXPECT_EQ(count(bytes({0x10, 0, 0, 0, 17, 0, 0, 0, 1, 0, 0, 0, 0, 0, 2, 0, 9}), frames), 1);
   EXPECT_EQ(frames, 0);
-  // nine data bytes: not classic CAN
-  std::vector<std::uint8_t> nine = bytes({0x10, 0, 0, 0, 25, 0, 0, 0, 1, 0, 0, 0, 0, 0, 9, 0});
-  nine.resize(25, 0);
-  EXPECT_EQ(count(nine, frames), 1);
   // an 11-bit frame with a 29-bit id
   EXPECT_EQ(count(bytes({0x10, 0, 0, 0, 16, 0, 0, 0, 0, 8, 0, 0, 0, 0, 0, 0}), frames), 1);
-  // a CAN FD Transmit on a classic-CAN contract, then a good frame: the walk goes on past it
-  std::vector<std::uint8_t> fd = bytes({0x11, 0, 0, 0, 17, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 1, 0, 0x7});
-  fd.resize(17);
-  std::vector<std::uint8_t> good(16 + 1);
+  // a Status of a value the standard does not have; an OP code it does not have
+  EXPECT_EQ(count(bytes({0x41, 0, 0, 0, 9, 0, 0, 0, 7}), frames), 1);
+  EXPECT_EQ(count(bytes({0x77, 0, 0, 0, 8, 0, 0, 0}), frames), 1);
+}
+
+// Valid operations of other nodes on a mixed bus (CAN FD and XL, a remote frame, nine data
+// bytes) are counted as not classic CAN, not refused and not read; the walk goes on past them.
+TEST(LsBusCodec, OtherNodesFdXlAndRemoteFramesAreLetBeNotRefused) {
+  std::vector<std::uint8_t> in = bytes({0x11, 0, 0, 0, 17, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 1, 0});  // CAN FD
+  const std::vector<std::uint8_t> remote = bytes({0x10, 0, 0, 0, 16, 0, 0, 0, 5, 0, 0, 0, 0, 1, 0, 0});
+  in.insert(in.end(), remote.begin(), remote.end());
+  std::vector<std::uint8_t> nine = bytes({0x10, 0, 0, 0, 25, 0, 0, 0, 1, 0, 0, 0, 0, 0, 9, 0});
+  nine.resize(25, 0);
+  in.insert(in.end(), nine.begin(), nine.end());
+  std::vector<std::uint8_t> good(17);
   Frame g;
   g.id = 5;
   g.len = 1;
   put_transmit(good, 0, g);
-  fd.insert(fd.end(), good.begin(), good.end());
-  EXPECT_EQ(count(fd, frames), 1);
+  in.insert(in.end(), good.begin(), good.end());
+  std::int64_t frames = 0, refused = 0;
+  const RxCounts c = parse(std::span<const std::uint8_t>(in), [&](const Frame& f) { frames += f.id == 5 ? 1 : 100; },
+                           [&](std::span<const std::uint8_t>) { ++refused; });
+  EXPECT_EQ(c.not_classic, 3);
+  EXPECT_EQ(c.malformed, 0);
+  EXPECT_EQ(refused, 0);
   EXPECT_EQ(frames, 1);
-  // a Status of a value the standard does not have
-  EXPECT_EQ(count(bytes({0x41, 0, 0, 0, 9, 0, 0, 0, 7}), frames), 1);
 }
 
 TEST(LsBusCodec, TheTerminalQueuesRxAnswersMalformedWithAFormErrorAndCountsAFullTx) {
