@@ -170,6 +170,37 @@ def reference_rows(name, step, out):
     return [lines[0]] + lines[2:], ""  # the header, then every row after t = 0
 
 
+def clean_run(files, args):
+    """fmu_run ARGS where nothing of ehpt is reachable: the importer and FILES (name -> path)
+    copied into a folder of their own, a mount namespace with an empty tmpfs over the source
+    (and build) tree and an installed /usr/share/ehpt, the system's libtomlplusplus.so.3 hidden.
+    Exits 77 (skipped) if this user cannot make a mount namespace."""
+    box = tempfile.mkdtemp(dir="/tmp", prefix="ehpt-fmu-clean-")
+    try:
+        shutil.copy(FMU_RUN, os.path.join(box, "fmu_run"))
+        for name, path in files.items():
+            shutil.copy(path, os.path.join(box, name))
+        hide = ["mount -t tmpfs none '%s'" % SRC]
+        build = os.path.dirname(os.path.dirname(FMU_RUN))
+        if not build.startswith(SRC + "/"):
+            hide.append("mount -t tmpfs none '%s'" % build)
+        if os.path.isdir("/usr/share/ehpt"):
+            hide.append("mount -t tmpfs none /usr/share/ehpt")
+        toml = "/usr/lib/x86_64-linux-gnu/libtomlplusplus.so.3"
+        if os.path.exists(toml):
+            hide.append("mount --bind /dev/null '%s'" % os.path.realpath(toml))
+        run = "cd '%s' && exec ./fmu_run %s" % (box, " ".join("'%s'" % a for a in args))
+        script = " && ".join(hide + ["test ! -e '%s/scenarios'" % SRC, run])
+        r = subprocess.run(["unshare", "-m", "--propagation", "private", "sh", "-c", script],
+                           capture_output=True, text=True, timeout=300)
+        if r.returncode != 0 and ("Operation not permitted" in r.stderr or "unshare failed" in r.stderr):
+            print("skipped: no mount namespace here: " + r.stderr.strip())
+            sys.exit(77 if not failures else 1)
+        return r
+    finally:
+        shutil.rmtree(box)
+
+
 with tempfile.TemporaryDirectory() as tmp:
     names = [line.split()[0] for line in ehpt("list").stdout.splitlines() if line.strip()]
     check(len(names) >= 30, "the shipped scenarios: %d" % len(names))
@@ -242,32 +273,10 @@ with tempfile.TemporaryDirectory() as tmp:
           "a bad --set: exit 2 with the load message, nothing written (%d): %s" % (r.returncode, r.stderr.strip()[-200:]))
 
     if CLEAN and psecu2 is not None:
-        # a machine without ehpt: copy the importer and the FMU out, hide the trees and the library
-        box = tempfile.mkdtemp(dir="/tmp", prefix="ehpt-fmu-clean-")
-        try:
-            shutil.copy(FMU_RUN, os.path.join(box, "fmu_run"))
-            shutil.copy(psecu2[0], os.path.join(box, "p.fmu"))
-            hide = ["mount -t tmpfs none '%s'" % SRC]
-            build = os.path.dirname(os.path.dirname(FMU_RUN))
-            if not build.startswith(SRC + "/"):
-                hide.append("mount -t tmpfs none '%s'" % build)
-            if os.path.isdir("/usr/share/ehpt"):
-                hide.append("mount -t tmpfs none /usr/share/ehpt")
-            toml = "/usr/lib/x86_64-linux-gnu/libtomlplusplus.so.3"
-            if os.path.exists(toml):
-                hide.append("mount --bind /dev/null '%s'" % os.path.realpath(toml))
-            script = " && ".join(hide + ["test ! -e '%s/scenarios'" % SRC,
-                                         "exec '%s/fmu_run' '%s/p.fmu' 10 2" % (box, box)])
-            r = subprocess.run(["unshare", "-m", "--propagation", "private", "sh", "-c", script],
-                               capture_output=True, text=True, timeout=300)
-            if r.returncode != 0 and ("Operation not permitted" in r.stderr or "unshare failed" in r.stderr):
-                print("skipped: no mount namespace here: " + r.stderr.strip())
-                sys.exit(77 if not failures else 1)
-            check(r.returncode == 0 and project(r.stdout.splitlines(), psecu2[1][0].split(",")) == psecu2[1],
-                  "psecu2_nedc where nothing of ehpt is reachable (trees and libtomlplusplus hidden): the same rows (%d): %s"
-                  % (r.returncode, r.stderr[-400:]))
-        finally:
-            shutil.rmtree(box)
+        r = clean_run({"p.fmu": psecu2[0]}, ["p.fmu", "10", "2"])
+        check(r.returncode == 0 and project(r.stdout.splitlines(), psecu2[1][0].split(",")) == psecu2[1],
+              "psecu2_nedc where nothing of ehpt is reachable (trees and libtomlplusplus hidden): the same rows (%d): %s"
+              % (r.returncode, r.stderr[-400:]))
 
 def ls_bus_problems(fmu):
     """What FMI-LS-BUS asks of a Low-Cut CAN FMU beyond FMI 3.0."""
@@ -366,6 +375,11 @@ with tempfile.TemporaryDirectory() as tmp:
                   first, rows[first][:100], want[first][:100]), got.stderr[-300:]))
         check("1201 event modes, 2402 transfers" in got.stderr and "fmi3Terminate OK" in got.stderr,
               "every sample crossed the bus both ways, the session OK: %s" % got.stderr.strip()[-200:])
+        if CLEAN:
+            r = clean_run({"plant.fmu": plant_fmu, "ecu.fmu": ecu_fmu}, ["plant.fmu", "10", "12", "ecu.fmu"])
+            check(r.returncode == 0 and want is not None and project(r.stdout.splitlines(), want[0].split(",")) == want,
+                  "the plant and ECU FMUs where nothing of ehpt is reachable: the same rows (%d): %s"
+                  % (r.returncode, r.stderr[-300:]))
         alone = subprocess.run([FMU_RUN, plant_fmu, "10", "12"], capture_output=True, text=True, timeout=300)
         check(alone.returncode == 0 and "fmi3Terminate Warning" in alone.stderr and "no ECU" in alone.stderr,
               "the plant FMU without its ECU: fmi3Terminate is a Warning that says no ECU: %s" % alone.stderr.strip()[-300:])
