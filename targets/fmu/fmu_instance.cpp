@@ -290,7 +290,7 @@ bool Instance::do_step(double current_s, double step_s, double& reached_s, bool&
   if (description_.role == Role::kEcu) {  // the ECU's time: it acts in Event Mode only
     ecu_step_ += n;
     reached_s = static_cast<double>(ecu_step_) * h;
-    event = publish_tx();  // what it has not handed over yet (an importer that skipped a tick)
+    event = publish_tx() || tx_clock_;  // what it has not handed over yet (an importer that skipped a tick)
     return true;
   }
   if (has_bus()) {  // a sample's frames go out when a doStep ends on it: no doStep may pass one
@@ -313,7 +313,7 @@ bool Instance::do_step(double current_s, double step_s, double& reached_s, bool&
     left -= k;
   }
   if (bus_plant_) bus_plant_->send_ahead();  // it stopped at a sample: its frames go out now
-  event = publish_tx();
+  event = publish_tx() || tx_clock_;  // a tick now, or one the importer has not fetched
   refresh_outputs();
   reached_s = sim_->time_s();
   if (left > 0) {  // the plant stopped on a fault (FaultPolicy::kStop), as ehpt run does
@@ -675,11 +675,12 @@ bool Instance::enter_step_mode() {
 // Tx_Data as FMI-LS-BUS's triggered Tx_Clock hands it over: the operations sent since the last
 // tick become its value (after what an importer has not fetched yet, if it skipped a tick), and
 // Tx_Clock is active until fmi3GetClock reports it, once. The value stays the same for every
-// fmi3GetBinary until the next tick, so an importer may read it once per connection.
+// fmi3GetBinary until the next tick, so an importer may read it once per connection. True if
+// there were new operations (a tick now).
 bool Instance::publish_tx() {
   if (!terminal_) return false;
   const std::span<const std::uint8_t> tx = terminal_->tx();
-  if (tx.empty()) return tx_clock_;
+  if (tx.empty()) return false;
   if (!tx_clock_) tx_out_.clear();  // the last value was fetched: a new one
   if (tx_out_.size() + tx.size() > tx_out_.capacity()) {
     ++tx_dropped_;

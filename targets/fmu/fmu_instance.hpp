@@ -144,7 +144,7 @@ class Instance {
            Fmi fmi, const std::vector<std::pair<std::string, double>>& numbers);
   // the bus terminal's side: the plant's bus driver or the ECU, built when initialization ends
   bool make_bus(const char* call);
-  // the terminal's new operations become Tx_Data's value and Tx_Clock ticks; true if it ticked
+  // the terminal's new operations become Tx_Data's value and Tx_Clock ticks; true if there were any
   bool publish_tx();
   // the bus variable a value reference names, or fails (call's message)
   const Variable* bus_variable(const char* call, std::uint32_t vr, Type type);
