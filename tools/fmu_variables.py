@@ -11,7 +11,8 @@ import subprocess
 import sys
 
 SCENARIOS = ["psecu2_nedc", "psecu1_nedc", "psecu1soc_nedc", "ev_nedc", "evpm_nedc", "evam_nedc", "evam_pu_sort1",
-             "battery_cc_discharge", "one_flange_test", "two_flange_test", "test_pm_drive", "test_am_drive"]
+             "battery_cc_discharge", "one_flange_test", "two_flange_test", "test_pm_drive", "test_am_drive",
+             "genset_test2", "genset_test_oo"]
 WITHOUT_ECU = ["psecu2_nedc", "ev_nedc"]
 
 

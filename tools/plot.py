@@ -9,7 +9,7 @@ Figures are written into OUT (default DIR); messages name them as if in NAME (de
 OUT): ehpt draws into a private folder and moves the figures into place itself.
 DIR must hold timeseries.csv (header of column names, then numeric rows) and usually
 summary.json.  The columns tell the vehicle family (one per vehicle kind: bev, ev_pm, ev_am,
-psd, drive_rig, battery_rig, pm_drive_test, am_drive_test); FAMILIES below names each
+psd, drive_rig, battery_rig, genset_rig, pm_drive_test, am_drive_test); FAMILIES below names each
 family's figures and the function that draws each.  A figure whose columns are absent from
 the CSV (a run with a chosen output.signals) is skipped silently.  --list-figures prints one
 line per family: the family, a colon, its figure files (docs/figures.md describes them).
@@ -471,6 +471,50 @@ def battery_power_figure(r):
     return fig
 
 
+# -------------------------------------------------------------------- genset rig
+def genset_power_figure(r):
+    """The request against what the engine gives, what the generator takes and what reaches
+    the DC side; below, when the generator's limiter cuts and whether the genset is on."""
+    if "dc_power_W" not in r.c or "power_ref_W" not in r.c:
+        return None
+    c = r.c
+    fig, axes = r.figure(2, "genset power", [3, 1])
+    axes[0].plot(r.t, c["power_ref_W"] / 1000.0, color="black", lw=1.0, label="request")
+    if "ice_power_W" in c:
+        axes[0].plot(r.t, c["ice_power_W"] / 1000.0, color="tab:red", label="engine")
+    if "gen_power_mech_W" in c:
+        axes[0].plot(r.t, -c["gen_power_mech_W"] / 1000.0, "--", color="tab:orange", label="generator (mechanical)")
+    axes[0].plot(r.t, c["dc_power_W"] / 1000.0, color="tab:blue", label="DC delivered")
+    axes[0].set_ylabel("power [kW]")
+    if "gen_limiting" in c:
+        axes[1].step(r.t, c["gen_limiting"], where="post", color="tab:purple", label="generator limited")
+    if "on" in c:
+        axes[1].step(r.t, c["on"] * 0.5, where="post", color="tab:green", label="on (0.5)")
+    axes[1].set_ylim(-0.1, 1.1)
+    axes[1].set_ylabel("flags [0/1]")
+    return fig
+
+
+def genset_speed_figure(r):
+    """The engine's speed against the GMS's best speed for the request; below, the engine's
+    torque against its maximum and the generator's (negative: generating)."""
+    if "iceW_rad_s" not in r.c or "ice_speed_ref_rad_s" not in r.c:
+        return None
+    c = r.c
+    fig, axes = r.figure(2, "genset speed and torques")
+    axes[0].plot(r.t, c["ice_speed_ref_rad_s"], "--", color="black", lw=1.0, label="GMS best speed")
+    axes[0].plot(r.t, c["iceW_rad_s"], color="tab:red", label="engine speed")
+    axes[0].set_ylabel("speed [rad/s]")
+    if "ice_torque_Nm" in c:
+        axes[1].plot(r.t, c["ice_torque_Nm"], color="tab:red", label="engine torque")
+    if "ice_torque_max_Nm" in c:
+        axes[1].plot(r.t, c["ice_torque_max_Nm"], ":", color="tab:red", label="engine maximum")
+    if "gen_torque_Nm" in c:
+        axes[1].plot(r.t, c["gen_torque_Nm"], color="tab:orange", label="generator torque")
+    axes[1].set_ylabel("torque [N m]")
+    return fig
+
+
 # -------------------------------------------------------------------- machine test rigs
 def detailed_figure(r):
     """TestPMDrive / TestAMDrive: the time-domain machine's phase voltage against the
@@ -565,6 +609,7 @@ FAMILIES = {
     "drive_rig": [("torque.png", rig_torque_figure), ("power.png", rig_power_figure),
                   ("efficiency.png", rig_efficiency_figure)],
     "battery_rig": [("power.png", battery_power_figure), ("soc.png", soc_figure)],
+    "genset_rig": [("power.png", genset_power_figure), ("speed.png", genset_speed_figure)],
     "pm_drive_test": DETAILED_FIGURES,
     "am_drive_test": DETAILED_FIGURES,
 }
@@ -578,6 +623,8 @@ def family_of(cols):
         return "am_drive_test" if "qs_u1_rms_V" in cols or "det_i_a_A" in cols else "pm_drive_test"
     if RIG_COLUMNS & cols.keys():
         return "drive_rig"
+    if "dc_power_W" in cols and "ice_speed_ref_rad_s" in cols:
+        return "genset_rig"
     if "iceW_rad_s" in cols:
         return "psd"
     if "id_A" in cols:

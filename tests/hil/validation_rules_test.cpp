@@ -29,6 +29,7 @@
 #include "plant/detailed_machines.hpp"
 #include "plant/drive_rigs.hpp"
 #include "plant/ev_machine_plant.hpp"
+#include "plant/genset_rig.hpp"
 #include "plant/machine_test_rigs.hpp"
 #include "plant/psd_plant.hpp"
 #include "test_plants.hpp"
@@ -317,6 +318,24 @@ TEST(ValidationRules, TheRigsRefuseEachOutOfRangeField) {
                    r.profile[0] = {plant::BatterySegment::Kind::kPower, kInf, 10.0};
                  }},
                 {"profile[0].duration_s", kPositive, [](Br& r) { r.profile[0].duration_s = 0; }}});
+
+  using Gr = plant::GensetRigParams;
+  const auto opti = [](std::vector<double> x, std::vector<double> y) {
+    return plant::Table1d(std::move(x), std::move(y), plant::Extrapolation::kHold);
+  };
+  expect_rules(shipped<Gr>("genset_test_oo"), whole,
+               {{"genset.ice.inertia_kgm2", kPositive, [](Gr& r) { r.genset.ice.inertia_kgm2 = 0; }},
+                {"genset.ice.torque_max", "needs at least 2 rows", [](Gr& r) { r.genset.ice.torque_max_Nm = {}; }},
+                {"genset.generator.power_max_W", kPositive, [](Gr& r) { r.genset.generator.power_max_W = 0; }},
+                {"genset.gear_ratio", kPositive, [](Gr& r) { r.genset.gear_ratio = 0; }},
+                {"genset.throttle_per_rad_s", kPositive, [](Gr& r) { r.genset.throttle_per_rad_s = kNan; }},
+                {"genset.opti_speed", "strictly increasing",
+                 [&](Gr& r) { r.genset.opti_speed_rpm = opti({0, 0}, {800, 850}); }},
+                {"genset.opti_speed", "must be > 0 rpm", [&](Gr& r) { r.genset.opti_speed_rpm = opti({0, 1e4}, {800, 0}); }},
+                {"request.rising_s", kPositive, [](Gr& r) { r.request_W.rising_s = 0; }},
+                {"off_at_s", "must be >= 0 s", [](Gr& r) { r.off_at_s = -1; }},
+                {"off_at_s", "must be >= 0 s", [](Gr& r) { r.off_at_s = kNan; }},
+                {"dc_voltage_V", kPositive, [](Gr& r) { r.dc_voltage_V = 0; }}});
 }
 
 // Each vehicle checks each of its components (a spoiled field in each names it) and its own

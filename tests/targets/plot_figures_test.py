@@ -49,6 +49,7 @@ RUNS = {
     "psd": [("psecu2_nedc", 200)],  # the engine starts at ~145 s
     "drive_rig": [("one_flange_test", 50), ("two_flange_test", 50)],
     "battery_rig": [("battery_cc_discharge", 60)],
+    "genset_rig": [("genset_test2", 5), ("genset_test_oo", 8)],
     "pm_drive_test": [("test_pm_drive", 0.5)],
     "am_drive_test": [("test_am_drive", 0.5)],
 }
