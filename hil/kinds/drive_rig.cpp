@@ -26,18 +26,7 @@ plant::DriveRigParams read_rig(Reader& root, Context& ctx) {
     p.flange_a_torque_Nm = r.number("flange_a_torque_Nm", p.flange_a_torque_Nm);
     r.finish();
   }
-  {
-    Reader r = root.sub("request");
-    plant::Trapezoid& t = p.request_Nm;
-    t.offset = r.number("offset_Nm", 0.0);
-    t.amplitude = r.number("amplitude_Nm", 0.0);
-    t.start_s = r.number("start_s", 0.0);
-    t.rising_s = r.required_number("rising_s");
-    t.width_s = r.number("width_s", 0.0);
-    t.falling_s = r.required_number("falling_s");
-    t.period_s = r.number("period_s", 1e6);
-    r.finish();
-  }
+  p.request_Nm = read_trapezoid(root.sub("request"), "Nm");
   return p;
 }
 

@@ -24,18 +24,7 @@ plant::GensetRigParams read_genset_rig(Reader& root, Context& ctx) {
     gs.generator = read_drive(g.sub("generator"), ctx);
     g.finish();
   }
-  {
-    Reader r = root.sub("request");
-    plant::Trapezoid& t = p.request_W;
-    t.offset = r.number("offset_W", 0.0);
-    t.amplitude = r.number("amplitude_W", 0.0);
-    t.start_s = r.number("start_s", 0.0);
-    t.rising_s = r.required_number("rising_s");
-    t.width_s = r.number("width_s", 0.0);
-    t.falling_s = r.required_number("falling_s");
-    t.period_s = r.number("period_s", 1e6);
-    r.finish();
-  }
+  p.request_W = read_trapezoid(root.sub("request"), "W");
   return p;
 }
 

@@ -26,4 +26,17 @@ std::optional<double> cycle_length(const plant::PropDriverParams& d) {
   return d.cycle_m_s.x().back();
 }
 
+plant::Trapezoid read_trapezoid(Reader r, const std::string& unit) {
+  plant::Trapezoid t;
+  t.offset = r.number("offset_" + unit, 0.0);
+  t.amplitude = r.number("amplitude_" + unit, 0.0);
+  t.start_s = r.number("start_s", 0.0);
+  t.rising_s = r.required_number("rising_s");
+  t.width_s = r.number("width_s", 0.0);
+  t.falling_s = r.required_number("falling_s");
+  t.period_s = r.number("period_s", 1e6);
+  r.finish();
+  return t;
+}
+
 }  // namespace ehpt::hil::kinds

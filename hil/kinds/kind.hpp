@@ -17,6 +17,7 @@
 #include "hil/config/test_reader.hpp"
 #include "hil/config/vehicle_kinds.hpp"
 #include "msgs/fields.hpp"
+#include "plant/drive_rigs.hpp"  // Trapezoid
 #include "solvers/integrators.hpp"
 
 namespace ehpt::hil::kinds {
@@ -68,6 +69,9 @@ inline std::vector<SignalInfo> signals_of(const Plant& plant) {
 void need_cycle(const KindInput& in, Context& ctx);
 void no_cycle(const KindInput& in, const char* what, Context& ctx);
 std::optional<double> cycle_length(const plant::PropDriverParams& d);
+// A rig's trapezoid profile (plant::Trapezoid): offset_<unit>, amplitude_<unit>, start_s,
+// rising_s*, width_s, falling_s*, period_s (1e6); unit "Nm", "rad_s", "W".
+plant::Trapezoid read_trapezoid(Reader r, const std::string& unit);
 // The EVs' built-in ECU, the driver-follower: an optional [ecu] table with its timing.
 void read_follower_ecu(Reader r, EcuTiming& timing, Context& ctx);
 

@@ -10,18 +10,6 @@ namespace ehpt::hil::kinds {
 namespace {
 
 // A trapezoid whose levels carry a unit suffix: [speed] offset_rad_s ..., [request] offset_Nm ...
-plant::Trapezoid read_profile(Reader r, const std::string& unit) {
-  plant::Trapezoid t;
-  t.offset = r.number("offset_" + unit, 0.0);
-  t.amplitude = r.number("amplitude_" + unit, 0.0);
-  t.start_s = r.number("start_s", 0.0);
-  t.rising_s = r.required_number("rising_s");
-  t.width_s = r.number("width_s", 0.0);
-  t.falling_s = r.required_number("falling_s");
-  t.period_s = r.number("period_s", 1e6);
-  r.finish();
-  return t;
-}
 
 KindRead read_pm_test(Reader& vr, const KindInput& in, Scenario& out, Problems& problems, Problems&, Context& ctx) {
   no_cycle(in, "a machine test rig", ctx);
@@ -29,8 +17,8 @@ KindRead read_pm_test(Reader& vr, const KindInput& in, Scenario& out, Problems& 
   p.u_dc_V = vr.number("u_dc_V", p.u_dc_V);
   p.current_filter_s = vr.number("current_filter_s", p.current_filter_s);
   p.machine = read_pm_drive(vr.sub("machine"));
-  p.speed_rad_s = read_profile(vr.sub("speed"), "rad_s");
-  p.request_Nm = read_profile(vr.sub("request"), "Nm");
+  p.speed_rad_s = read_trapezoid(vr.sub("speed"), "rad_s");
+  p.request_Nm = read_trapezoid(vr.sub("request"), "Nm");
   vr.finish();
   plant::validate(p, problems);
   check_signals(plant::PmDriveTest::kSignals, out.output.signals, ctx);
@@ -43,8 +31,8 @@ KindRead read_am_test(Reader& vr, const KindInput& in, Scenario& out, Problems& 
   no_cycle(in, "a machine test rig", ctx);
   plant::AmDriveTestParams p;
   p.machine = read_am_drive(vr.sub("machine"));
-  p.speed_rad_s = read_profile(vr.sub("speed"), "rad_s");
-  p.request_Nm = read_profile(vr.sub("request"), "Nm");
+  p.speed_rad_s = read_trapezoid(vr.sub("speed"), "rad_s");
+  p.request_Nm = read_trapezoid(vr.sub("request"), "Nm");
   vr.finish();
   plant::validate(p, problems);
   check_signals(plant::AmDriveTest::kSignals, out.output.signals, ctx);

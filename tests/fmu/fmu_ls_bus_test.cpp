@@ -41,6 +41,23 @@ int ehpt(const std::vector<std::string>& args) {
 
 bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
+// timeseries.csv of `ehpt run`: column name -> values, row by row
+std::map<std::string, std::vector<double>> columns(const std::string& path) {
+  std::map<std::string, std::vector<double>> cols;
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> names;
+  std::stringstream hs(line);
+  for (std::string n; std::getline(hs, n, ',');) names.push_back(n);
+  while (std::getline(in, line)) {
+    std::stringstream ls(line);
+    std::size_t c = 0;
+    for (std::string v; std::getline(ls, v, ',') && c < names.size(); ++c) cols[names[c]].push_back(std::strtod(v.c_str(), nullptr));
+  }
+  return cols;
+}
+
 constexpr double kStop_s = 20.0;
 
 class LsBus : public ::testing::Test {
@@ -56,18 +73,7 @@ class LsBus : public ::testing::Test {
     ASSERT_EQ(ehpt({"run", "psecu2_nedc", "--quiet", "--out", *dir_ + "/ref", "--set", "output.interval_s=0.001", "--set", d,
                     "--set", "vehicle.ecu.codec=can"}),
               0);
-    ref_ = new std::map<std::string, std::vector<double>>();
-    std::ifstream in(*dir_ + "/ref/timeseries.csv");
-    std::string line;
-    std::getline(in, line);
-    std::vector<std::string> names;
-    std::stringstream hs(line);
-    for (std::string n; std::getline(hs, n, ',');) names.push_back(n);
-    while (std::getline(in, line)) {
-      std::stringstream ls(line);
-      std::size_t c = 0;
-      for (std::string v; std::getline(ls, v, ','); ++c) (*ref_)[names[c]].push_back(std::strtod(v.c_str(), nullptr));
-    }
+    ref_ = new std::map<std::string, std::vector<double>>(columns(*dir_ + "/ref/timeseries.csv"));
   }
   static void TearDownTestSuite() {
     std::error_code ec;
@@ -337,20 +343,7 @@ TEST_F(LsBus, BusFaultsActOnTheFramesAndErrorFramesAreBusErrorAndStatusOperation
   ASSERT_EQ(ehpt({"run", "psecu2_nedc", "--quiet", "--out", *dir_ + "/refdrop", "--set", "output.interval_s=0.001", "--set", d,
                   "--fault", drop}),
             0);
-  std::map<std::string, std::vector<double>> ref;
-  {
-    std::ifstream in(*dir_ + "/refdrop/timeseries.csv");
-    std::string line;
-    std::getline(in, line);
-    std::vector<std::string> names;
-    std::stringstream hs(line);
-    for (std::string n; std::getline(hs, n, ',');) names.push_back(n);
-    while (std::getline(in, line)) {
-      std::stringstream ls(line);
-      std::size_t c = 0;
-      for (std::string v; std::getline(ls, v, ','); ++c) ref[names[c]].push_back(std::strtod(v.c_str(), nullptr));
-    }
-  }
+  std::map<std::string, std::vector<double>> ref = columns(*dir_ + "/refdrop/timeseries.csv");
   Fmi3Fmu plant, ecu;
   std::string error;
   ASSERT_TRUE(plant.open(*dir_ + "/drop.fmu", error)) << error;
@@ -420,6 +413,22 @@ TEST_F(LsBus, OutputsAtASamplePointAreThatPointsEvenWithoutACommand) {
   for (std::size_t r = 0; r < rows.size(); ++r) differ += same_bits(rows[r][j], ref_->at("speed_ref_m_s")[(r + 1) * 10]) ? 0 : 1;
   EXPECT_EQ(differ, 0);
   EXPECT_GT(rows.back()[j], 0.5) << "NEDC moves by 12 s";
+}
+
+// The ECU FMU with no plant on its bus answers nothing, and its fmi3Terminate says so (Warning).
+TEST_F(LsBus, TheEcuAloneOnItsBusTerminatesWithAWarningNotOk) {
+  Fmi3Fmu ecu;
+  std::string error;
+  ASSERT_TRUE(ecu.open(*dir_ + "/ecu.fmu", error)) << error;
+  fmi3Instance e = ecu.make_instance("alone", nullptr, true);
+  std::vector<std::vector<double>> rows;
+  BusRun run;
+  ASSERT_TRUE(run_bus_pair(ecu, e, nullptr, nullptr, 10, 1.0, rows, run, error)) << error;
+  EXPECT_EQ(run.terminate_status, fmi3Warning);
+  bool said = false;
+  for (const std::string& l : ecu.log) said = said || l.find("no plant") != std::string::npos;
+  EXPECT_TRUE(said);
+  ecu.free_instance(e);
 }
 
 TEST_F(LsBus, WrongUseIsAnErrorWithAMessage) {
