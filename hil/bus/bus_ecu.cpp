@@ -268,6 +268,7 @@ class CanEcuNodeOf final : public CanEcuNode {
   CanEcuNodeOf(Controller controller, io::can::Transport& bus, double h_s)
       : controller_(std::move(controller)), wire_(bus, h_s) {}
   void poll() override { answer(controller_, wire_, command_, res_); }
+  std::int64_t samples_answered() const override { return res_.samples; }
   void report(io::JsonObject& out) const override {
     out.integer("samples_answered", res_.samples);
     out.integer("incomplete_samples", wire_.incomplete());

@@ -50,6 +50,7 @@ class CanEcuNode {
   // its figures: samples answered, incomplete samples (frames a bus fault took), frames its
   // receive rules refused (a corrupt or counter-jumped frame), signals the codec saturated
   virtual void report(io::JsonObject& out) const = 0;
+  virtual std::int64_t samples_answered() const = 0;
 };
 // The scenario's built-in ECU on bus (has_bus_ecu must hold; nullptr otherwise).
 std::unique_ptr<CanEcuNode> make_can_ecu_node(const Scenario& sc, io::can::Transport& bus);

@@ -624,6 +624,11 @@ bool Instance::terminate() {
       log_(kWarning, "logStatusWarning", sc_.name + ": the bus session is degraded: " + why);
     }
   }
+  if (ecu_node_ && ecu_node_->samples_answered() == 0) {  // an ECU that never heard its plant did not do its job
+    degraded_ = true;
+    log_(kWarning, "logStatusWarning",
+         sc_.name + ": the ECU's bus session is degraded: no plant: not one complete sample came, none answered");
+  }
   return true;
 }
 

@@ -121,7 +121,8 @@ class Instance {
   bool set_boolean(const std::uint32_t* vrs, std::size_t n, const bool* values, std::size_t n_values);
   bool terminate();
   // After terminate: a bus session that did not do what a session must (logged as Warnings:
-  // no ECU, commands that timed out): fmi3Terminate answers fmi3Warning.
+  // the plant's no ECU or commands that timed out, the ECU's no plant): fmi3Terminate answers
+  // fmi3Warning.
   bool degraded() const { return degraded_; }
   bool reset();
   // After initialization (Step Mode, or Terminated by a plant fault): the state now, into out
