@@ -34,7 +34,8 @@ import os, shutil, subprocess, sys
 
 here, pattern, target, tests, mutants_text = sys.argv[1:6]
 build_cmd = lambda: ["cmake", "--build", build, "-j", jobs] + (["--target"] + target.split() if target.strip() else [])
-test_cmd = lambda: ["ctest", "-j", jobs] + (["-R", tests] if tests else [])
+# --no-tests=error: a --tests REGEX that selects nothing would let every mutant "survive" unseen
+test_cmd = lambda: ["ctest", "-j", jobs, "--no-tests=error"] + (["-R", tests] if tests else [])
 work = os.environ.get("EHPT_MUTATE_DIR") or os.path.join(here, "build-mutate")  # EHPT_MUTATE_DIR: a second run beside the first
 src, build = os.path.join(work, "src"), os.path.join(work, "build")
 jobs = str(os.cpu_count() or 2)
