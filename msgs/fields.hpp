@@ -9,6 +9,7 @@
 
 #include "msgs/ev.hpp"
 #include "msgs/psd.hpp"
+#include "msgs/shev.hpp"
 
 namespace ehpt::msgs {
 
@@ -83,6 +84,28 @@ inline constexpr std::array<Field<EvCommand>, 1> kEvCommandFieldTable = {{
     EHPT_FIELD(EvCommand, driveTauRef_Nm, FieldKind::kQuantity, "Nm"),
 }};
 
+inline constexpr std::array<Field<ShevSensors>, 13> kShevSensorFieldTable = {{
+    EHPT_FIELD(ShevSensors, driverRequest_Nm, FieldKind::kQuantity, "Nm"),
+    EHPT_FIELD(ShevSensors, speed_m_s, FieldKind::kQuantity, "m/s"),
+    EHPT_FIELD(ShevSensors, driveW_rad_s, FieldKind::kQuantity, "rad/s"),
+    EHPT_FIELD(ShevSensors, driveTauLim_Nm, FieldKind::kQuantity, "Nm"),
+    EHPT_FIELD(ShevSensors, drivePowDc_W, FieldKind::kQuantity, "W"),
+    EHPT_FIELD(ShevSensors, gensetW_rad_s, FieldKind::kQuantity, "rad/s"),
+    EHPT_FIELD(ShevSensors, gensetPowDc_W, FieldKind::kQuantity, "W"),
+    EHPT_FIELD(ShevSensors, batSOC, FieldKind::kFraction, ""),
+    EHPT_FIELD(ShevSensors, batPowDel_W, FieldKind::kQuantity, "W"),
+    EHPT_FIELD(ShevSensors, battery_voltage_V, FieldKind::kQuantity, "V"),
+    EHPT_FIELD(ShevSensors, battery_current_A, FieldKind::kQuantity, "A"),
+    EHPT_FIELD(ShevSensors, fault, FieldKind::kBits, ""),
+    EHPT_FLAG(ShevSensors, locked),
+}};
+
+inline constexpr std::array<Field<ShevCommand>, 3> kShevCommandFieldTable = {{
+    EHPT_FIELD(ShevCommand, driveTauRef_Nm, FieldKind::kQuantity, "Nm"),
+    EHPT_FIELD(ShevCommand, gensetPowRef_W, FieldKind::kQuantity, "W"),
+    EHPT_FLAG(ShevCommand, gensetON),
+}};
+
 #undef EHPT_FIELD
 #undef EHPT_FLAG
 
@@ -104,6 +127,15 @@ struct FieldTable<EvSensors> {
 template <>
 struct FieldTable<EvCommand> {
   static constexpr const auto& kFields = kEvCommandFieldTable;
+};
+
+template <>
+struct FieldTable<ShevSensors> {
+  static constexpr const auto& kFields = kShevSensorFieldTable;
+};
+template <>
+struct FieldTable<ShevCommand> {
+  static constexpr const auto& kFields = kShevCommandFieldTable;
 };
 
 }  // namespace ehpt::msgs

@@ -28,9 +28,10 @@ Genset::Genset(const GensetParams& params)
       gen_(params.generator),
       inertia_kgm2_(params.ice.inertia_kgm2 + params.generator.inertia_kgm2 / (params.gear_ratio * params.gear_ratio)) {}
 
-GensetPoint Genset::operate(double power_ref_W, bool on, double speed_rad_s) const {
+GensetPoint Genset::operate(double power_request_W, bool on, double speed_rad_s, double gen_torque_gain) const {
   GensetPoint g;
   const double w = speed_rad_s, r = p_.gear_ratio;
+  const double power_ref_W = power_request_W > 0.0 ? power_request_W : 0.0;  // the input limiter
   g.speed_ref_rad_s = p_.opti_speed_rpm(power_ref_W) * (2.0 * std::numbers::pi / 60.0);
   g.throttle = std::clamp(p_.throttle_per_rad_s * (g.speed_ref_rad_s - w), -1.0, 1.0);
   g.ice_torque_max_Nm = ice_.torque_max_Nm(w);
@@ -41,9 +42,11 @@ GensetPoint Genset::operate(double power_ref_W, bool on, double speed_rad_s) con
   g.ice_torque_Nm = g.ice_torque_max_Nm * std::clamp(g.throttle, 0.0, 1.0);
   // the load the GMS asks of the generator, within what the engine can give at this speed (a
   // shaft at rest asks nothing: P / w has no value there)
-  const double load_Nm = w != 0.0 ? std::clamp(power_ref_W / w, -g.ice_torque_max_Nm, g.ice_torque_max_Nm) : 0.0;
+  double load_Nm = w != 0.0 ? power_ref_W / w : 0.0;
+  if (p_.gms_limits_torque) load_Nm = std::clamp(load_Nm, -g.ice_torque_max_Nm, g.ice_torque_max_Nm);
   g.gen_request_Nm = -r * load_Nm;
   g.gen = gen_.operate(g.gen_request_Nm, w / r);
+  if (gen_torque_gain != 1.0) [[unlikely]] g.gen = gen_.derated(g.gen, g.gen_request_Nm, w / r, gen_torque_gain);
   g.fuel_rate_kg_s = ice_.fuel_rate_kg_s(g.ice_torque_Nm, w);
   g.shaft_torque_Nm = g.ice_torque_Nm + g.gen.torque_Nm / r;
   return g;

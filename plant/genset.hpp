@@ -6,7 +6,9 @@
 //
 //   GMS:   w_opt    = optiSpeed(P_ref) 2 pi / 60                (optiSpeed in rpm vs W)
 //          throttle = clamp(k_w (w_opt - w), -1, 1)              (k_w = throttle_per_rad_s)
-//          tau_load = clamp(P_ref / w, -tau_max_ice(w), tau_max_ice(w))
+//          P_ref    = max(0, power request)                      (the genset's input limiter)
+//          tau_load = clamp(P_ref / w, -tau_max_ice(w), tau_max_ice(w))   (gms_limits_torque;
+//                     the plain Genset of V3 disables this limit, GensetOO keeps it)
 //          generator torque request = -r tau_load               (r = gear_ratio)
 //   ICE (IceT01):  tau_ice = tau_max_ice(w) clamp(throttle, 0, 1)
 //   generator:     tau_gen = limiter(request, w_gen), w_gen = w / r, P_dc from its map (§1.4)
@@ -30,6 +32,9 @@ struct GensetParams {
   double gear_ratio = 1.0;      // gsRatio: w_ice = r w_gen
   double throttle_per_rad_s = 0.1;  // GMS speed-error gain (throttlePerWerr)
   Table1d opti_speed_rpm;       // GMS: the engine's best speed (rpm) vs power request (W)
+  // GMS: clamp P_ref / w to the engine's maximum torque. V3's plain Genset sets the GMS's limits
+  // to 1e9 N m (its documentation: "GMS torque limitation is disabled"), GensetOO keeps them.
+  bool gms_limits_torque = true;
 };
 
 void validate(const GensetParams& p, const std::string& at, Problems& problems);
@@ -54,8 +59,9 @@ class Genset {
   // the inertia the engine's shaft moves: J_ice + J_gen / r^2
   double inertia_kgm2() const { return inertia_kgm2_; }
 
-  // Run phase: pure, no allocation.
-  GensetPoint operate(double power_ref_W, bool on, double speed_rad_s) const;
+  // Run phase: pure, no allocation. gen_torque_gain < 1: the generator derated (a plant fault,
+  // plant/health.hpp), its torque bound x the gain.
+  GensetPoint operate(double power_ref_W, bool on, double speed_rad_s, double gen_torque_gain = 1.0) const;
 
  private:
   GensetParams p_;

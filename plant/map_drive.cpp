@@ -22,6 +22,9 @@ void validate(const MapDriveParams& p, const std::string& at, Problems& problems
       }
     }
   }
+  if (p.loss_model == DriveLossModel::kConstant && !(p.efficiency > 0.0 && p.efficiency <= 1.0)) {
+    problems.add(at + ".efficiency", number_text(p.efficiency), "must be in (0, 1]");
+  }
   if (p.loss_model == DriveLossModel::kFormula) {
     problems.require_non_negative(at + ".loss_formula.a", p.loss_formula.a);
     problems.require_non_negative(at + ".loss_formula.b_t", p.loss_formula.b_t);

@@ -38,7 +38,7 @@ namespace ehpt::plant {
 
 inline constexpr double kEfficiencyFloor = 0.01;  // §1.4: avoid dividing by ~0 outside the map
 
-enum class DriveLossModel { kIdeal, kMap, kFormula };
+enum class DriveLossModel { kIdeal, kMap, kFormula, kConstant };
 
 struct LossFormula {
   double a = 0.006;   // constant losses, per unit of tau_max * w_max
@@ -56,6 +56,8 @@ struct MapDriveParams {
   DriveLossModel loss_model = DriveLossModel::kIdeal;
   Table2d efficiency_map;             // per unit; rows torque/tau_max, columns speed/w_max
   LossFormula loss_formula;
+  double efficiency = 1.0;            // kConstant: one efficiency everywhere (the library's Level 1
+                                      // genset: constGenEfficiency), in (0, 1]
 };
 
 void validate(const MapDriveParams& p, const std::string& at, Problems& problems);
@@ -146,6 +148,8 @@ struct MotBus {
       const double eta = p_.efficiency_map(std::abs(torque_Nm) * inv_torque_max_, std::abs(speed_rad_s) * inv_speed_max_);
       return std::max(eta, kEfficiencyFloor);
     }
+    case DriveLossModel::kConstant:
+      return p_.efficiency;
     case DriveLossModel::kFormula: {
       const double tu = std::abs(torque_Nm) * inv_torque_max_;
       const double wu = std::abs(speed_rad_s) * inv_speed_max_;

@@ -855,7 +855,10 @@ class PySimulation {
               : sc_.ecu.holds<ecu::EvFollowerParams>() ? Family::kEv
                                                        : Family::kNone;
     if (external_ && family_ == Family::kNone) {
-      raise_argument_error(scenario, "external_ecu", "True", "this vehicle has no ECU (a test rig), so there is none to replace");
+      raise_argument_error(scenario, "external_ecu", "True",
+                           sc_.ecu.empty() ? "this vehicle has no ECU (a test rig), so there is none to replace"
+                                           : "this vehicle's ECU messages are not in ehpt's bus contract yet (the "
+                                             "series hybrid), so Python cannot take its place");
     }
     if (external_ && sc_.solver.ecu_latency_steps != 0) {
       // the runner applies an external command from its sample on (as a lockstep bus plant)
@@ -919,7 +922,8 @@ class PySimulation {
       }
       case Family::kNone: break;
     }
-    throw py::type_error(sc_.name + ": this vehicle has no ECU messages (a test rig)");
+    throw py::type_error(sc_.name + (sc_.ecu.empty() ? ": this vehicle has no ECU messages (a test rig)"
+                                                     : ": this vehicle's ECU messages are not in ehpt's bus contract yet"));
   }
 
   void write_command(const CommandArg& cmd) {

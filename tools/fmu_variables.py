@@ -12,7 +12,8 @@ import sys
 
 SCENARIOS = ["psecu2_nedc", "psecu1_nedc", "psecu1soc_nedc", "ev_nedc", "evpm_nedc", "evam_nedc", "evam_pu_sort1",
              "battery_cc_discharge", "one_flange_test", "two_flange_test", "test_pm_drive", "test_am_drive",
-             "genset_test2", "genset_test_oo"]
+             "genset_test2", "genset_test_oo", "shev_power_filt_sort1", "shev_power_filt_soc_sort1", "shev_oo_sort1",
+             "shev_oo_nomaps_sort1"]
 WITHOUT_ECU = ["psecu2_nedc", "ev_nedc"]
 
 

@@ -9,7 +9,7 @@ Figures are written into OUT (default DIR); messages name them as if in NAME (de
 OUT): ehpt draws into a private folder and moves the figures into place itself.
 DIR must hold timeseries.csv (header of column names, then numeric rows) and usually
 summary.json.  The columns tell the vehicle family (one per vehicle kind: bev, ev_pm, ev_am,
-psd, drive_rig, battery_rig, genset_rig, pm_drive_test, am_drive_test); FAMILIES below names each
+psd, shev, drive_rig, battery_rig, genset_rig, pm_drive_test, am_drive_test); FAMILIES below names each
 family's figures and the function that draws each.  A figure whose columns are absent from
 the CSV (a run with a chosen output.signals) is skipped silently.  --list-figures prints one
 line per family: the family, a colon, its figure files (docs/figures.md describes them).
@@ -515,6 +515,47 @@ def genset_speed_figure(r):
     return fig
 
 
+# -------------------------------------------------------------------- series hybrid
+def shev_power_figure(r):
+    """The DC bus of the series hybrid: what the drive draws, what the genset delivers and
+    what the battery gives (the difference), with the EMS's request; below, the genset on."""
+    if "drive_power_dc_W" not in r.c or "genset_power_dc_W" not in r.c:
+        return None
+    c = r.c
+    fig, axes = r.figure(2, "DC powers of drive and genset", [3, 1])
+    axes[0].plot(r.t, c["drive_power_dc_W"] / 1000.0, color="tab:blue", lw=0.8, label="drive (drawn)")
+    if "battery_power_W" in c:
+        axes[0].plot(r.t, c["battery_power_W"] / 1000.0, color="tab:gray", lw=0.6, label="battery (given)")
+    if "genset_power_ref_W" in c:
+        axes[0].plot(r.t, c["genset_power_ref_W"] / 1000.0, "--", color="black", lw=1.0, label="EMS request")
+    axes[0].plot(r.t, c["genset_power_dc_W"] / 1000.0, color="tab:red", lw=1.4, label="genset (delivered)")
+    axes[0].set_ylabel("power [kW]")
+    if "genset_on" in c:
+        r.flag_panel(axes[1], "genset_on", "genset on [0/1]", "tab:green")
+    return fig
+
+
+def shev_genset_figure(r):
+    """The genset: the engine's speed against the GMS's best speed for the request, and the
+    engine's power against the generator's mechanical power and the DC power it delivers."""
+    if "genset_speed_rad_s" not in r.c:
+        return None
+    c = r.c
+    fig, axes = r.figure(2, "genset speed and power")
+    if "genset_speed_ref_rad_s" in c:
+        axes[0].plot(r.t, c["genset_speed_ref_rad_s"], "--", color="black", lw=1.0, label="GMS best speed")
+    axes[0].plot(r.t, c["genset_speed_rad_s"], color="tab:red", label="engine speed")
+    axes[0].set_ylabel("speed [rad/s]")
+    if "ice_power_W" in c:
+        axes[1].plot(r.t, c["ice_power_W"] / 1000.0, color="tab:red", label="engine")
+    if "gen_power_mech_W" in c:
+        axes[1].plot(r.t, -c["gen_power_mech_W"] / 1000.0, "--", color="tab:orange", label="generator (mechanical)")
+    if "genset_power_dc_W" in c:
+        axes[1].plot(r.t, c["genset_power_dc_W"] / 1000.0, color="tab:blue", lw=0.8, label="DC delivered")
+    axes[1].set_ylabel("power [kW]")
+    return fig
+
+
 # -------------------------------------------------------------------- machine test rigs
 def detailed_figure(r):
     """TestPMDrive / TestAMDrive: the time-domain machine's phase voltage against the
@@ -610,6 +651,8 @@ FAMILIES = {
                   ("efficiency.png", rig_efficiency_figure)],
     "battery_rig": [("power.png", battery_power_figure), ("soc.png", soc_figure)],
     "genset_rig": [("power.png", genset_power_figure), ("speed.png", genset_speed_figure)],
+    "shev": [("speed.png", speed_figure), ("power.png", shev_power_figure), ("genset.png", shev_genset_figure),
+             ("soc.png", soc_figure), ("locked.png", locked_figure)],
     "pm_drive_test": DETAILED_FIGURES,
     "am_drive_test": DETAILED_FIGURES,
 }
@@ -625,6 +668,8 @@ def family_of(cols):
         return "drive_rig"
     if "dc_power_W" in cols and "ice_speed_ref_rad_s" in cols:
         return "genset_rig"
+    if "genset_speed_rad_s" in cols:
+        return "shev"
     if "iceW_rad_s" in cols:
         return "psd"
     if "id_A" in cols:

@@ -300,7 +300,9 @@ bool has_bus_ecu(const Scenario& sc, std::string& why) {
   if (sc.ecu.holds<ecu::PsdEcuParams>() || sc.ecu.holds<ecu::EvFollowerParams>()) {
     return true;
   }
-  why = sc.name + ": its vehicle (" + sc.vehicle_path + ") has no built-in ECU to run on the bus";
+  why = sc.name + ": its vehicle (" + sc.vehicle_path + ")" +
+        (sc.ecu.empty() ? " has no built-in ECU to run on the bus"
+                        : "'s ECU has no messages in the bus contract yet (the series hybrid): it cannot run on the bus");
   return false;
 }
 

@@ -489,7 +489,8 @@ bool can_run_on_bus(const Scenario& sc, std::string& why) {
   // the ECU's messages decide the bus family: every EV kind uses the follower's, the hybrid its own
   if (!sc.ecu.holds<ecu::PsdEcuParams>() && !sc.ecu.holds<ecu::EvFollowerParams>()) {
     why = sc.name + ": its vehicle (" + sc.vehicle_path +
-          ") has no bus messages (the EV and the power-split hybrid talk to an ECU; the rigs do not)";
+          ") has no bus messages (the EV and the power-split hybrid talk to an ECU; the series hybrid's "
+          "messages are not in the bus contract yet, and the rigs have no ECU)";
     return false;
   }
   if (sc.solver.ecu_latency_steps != 0) {

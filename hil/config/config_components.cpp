@@ -57,6 +57,9 @@ plant::MapDriveParams read_drive(Reader r, Context& ctx) {
     p.loss_model = plant::DriveLossModel::kMap;
     const FileRef map = r.path("efficiency_map", true);
     if (!map.empty()) p.efficiency_map = load_map(map, r.field("efficiency_map"), ctx);
+  } else if (model == "constant") {
+    p.loss_model = plant::DriveLossModel::kConstant;
+    p.efficiency = r.required_number("efficiency");
   } else if (model == "formula") {
     p.loss_model = plant::DriveLossModel::kFormula;
     Reader f = r.sub("loss_formula");
@@ -67,10 +70,14 @@ plant::MapDriveParams read_drive(Reader r, Context& ctx) {
     f.finish();
   } else {
     ctx.error(ctx.where[r.field("loss_model")], r.field("loss_model"), "\"" + model + "\"",
-              "must be \"ideal\", \"map\" or \"formula\"");
+              "must be \"ideal\", \"map\", \"formula\" or \"constant\"");
   }
   if (model != "map" && r.has("efficiency_map")) r.path("efficiency_map", false);  // allowed, unused
   if (model != "formula" && r.has("loss_formula")) r.sub("loss_formula");
+  if (model != "constant" && r.has("efficiency")) {
+    ctx.error(ctx.where[r.field("efficiency")], r.field("efficiency"), "(set)",
+              "only loss_model = \"constant\" has one efficiency: set it, or remove the key");
+  }
   plausible_drive_rating(r, p.torque_max_Nm, p.power_max_W, p.speed_max_rad_s);
   r.plausible("inertia_kgm2", p.inertia_kgm2, kRotorInertiaBand.lo, kRotorInertiaBand.hi, "kg m^2", "a rotor's inertia");
   r.finish();
@@ -253,8 +260,17 @@ plant::MapIceParams read_ice(Reader r, Context& ctx) {
   p.fuel_lhv_J_kg = r.number("fuel_lhv_J_kg", p.fuel_lhv_J_kg);
   p.fuel_density_kg_m3 = r.number("fuel_density_kg_m3", p.fuel_density_kg_m3);
   p.on_off = r.flag("on_off", false);
-  const FileRef curve = r.path("torque_max_table", true);
+  const FileRef curve = r.path("torque_max_table", !r.has("torque_max_Nm"));
   if (!curve.empty()) p.torque_max_Nm = load_curve(curve, r.field("torque_max"), ctx);
+  // a constant instead of a table (the library's Level 1 genset: maxIceTau = 1.1 maxTau)
+  if (r.has("torque_max_Nm")) {
+    const double t_Nm = r.number("torque_max_Nm", 0.0);
+    if (!curve.empty()) {
+      ctx.error(ctx.where[r.field("torque_max_Nm")], r.field("torque_max_Nm"), plant::number_text(t_Nm),
+                "give either torque_max_table or torque_max_Nm, not both");
+    }
+    p.torque_max_Nm = plant::Table1d({0.0, 1.0}, {t_Nm, t_Nm}, plant::Extrapolation::kHold);
+  }
   r.plausible("inertia_kgm2", p.inertia_kgm2, kRotorInertiaBand.lo, kRotorInertiaBand.hi, "kg m^2",
               "an engine's inertia");
   if (!p.torque_max_Nm.empty()) {
@@ -268,8 +284,17 @@ plant::MapIceParams read_ice(Reader r, Context& ctx) {
                    "it runs as given)");
     }
   }
-  const FileRef sfc = r.path("sfc_map", true);
+  const FileRef sfc = r.path("sfc_map", !r.has("sfc_g_kWh"));
   if (!sfc.empty()) p.sfc_g_kWh = load_map(sfc, r.field("sfc_map"), ctx);
+  // a constant specific consumption (the library's Level 1 genset: constFuelConsumption)
+  if (r.has("sfc_g_kWh")) {
+    const double sfc_g_kWh = r.number("sfc_g_kWh", 0.0);
+    if (!sfc.empty()) {
+      ctx.error(ctx.where[r.field("sfc_g_kWh")], r.field("sfc_g_kWh"), plant::number_text(sfc_g_kWh),
+                "give either sfc_map or sfc_g_kWh, not both");
+    }
+    p.sfc_g_kWh = plant::Table2d({0.0, 1.0}, {0.0, 1.0}, {sfc_g_kWh, sfc_g_kWh, sfc_g_kWh, sfc_g_kWh});
+  }
   r.finish();
   return p;
 }

@@ -174,9 +174,10 @@ void read_fault(Reader& r, std::size_t index, Scenario& out, Context& ctx) {
               "kind = \"" + kind + "\" acts on a message field (batSOC, battery_voltage_V, ...); the pack's own "
               "faults are r0_gain, capacity_fade, internal_short and string_loss");
   }
-  if (f.effect == FaultEffect::kNoStart && f.target != "iceON") {
+  if (f.effect == FaultEffect::kNoStart && f.target != "iceON" && f.target != "gensetON") {
     ctx.error(ctx.where[r.field("target")], r.field("target"), "\"" + f.target + "\"",
-              "kind = \"no_start\" acts on the engine: leave target out (or target = \"iceON\")");
+              "kind = \"no_start\" acts on the engine: leave target out (or target = \"iceON\", the series "
+              "hybrid's \"gensetON\")");
   }
   // when it acts: [at_s, until_s) or from the step after `when` first holds
   const bool has_at = r.has("at_s"), has_until = r.has("until_s"), has_duration = r.has("duration_s");
@@ -658,9 +659,13 @@ void check_test_targets(std::span<const std::string_view> outputs, std::span<con
         continue;
       }
     }
-    if (f.effect == FaultEffect::kNoStart && !has(commands, "iceON")) {
-      ctx.errors.push_back(f.where + ": " + field + ": kind = \"no_start\" acts on an engine; this vehicle has none");
-      continue;
+    if (f.effect == FaultEffect::kNoStart) {
+      // the engine's ON flag: the power-split hybrid's iceON, the series hybrid's gensetON
+      if (f.target == "iceON" && !has(commands, "iceON") && has(commands, "gensetON")) f.target = "gensetON";
+      if (!has(commands, f.target)) {
+        ctx.errors.push_back(f.where + ": " + field + ": kind = \"no_start\" acts on an engine; this vehicle has none");
+        continue;
+      }
     }
     if (has(sensors, f.target)) {
       f.side = FaultSide::kSensor;

@@ -13,17 +13,7 @@ plant::GensetRigParams read_genset_rig(Reader& root, Context& ctx) {
   plant::GensetRigParams p;
   p.dc_voltage_V = root.number("dc_voltage_V", p.dc_voltage_V);
   p.off_at_s = root.number("off_at_s", p.off_at_s);
-  {
-    Reader g = root.sub("genset");
-    plant::GensetParams& gs = p.genset;
-    gs.gear_ratio = g.number("gear_ratio", gs.gear_ratio);
-    gs.throttle_per_rad_s = g.number("throttle_per_rad_s", gs.throttle_per_rad_s);
-    const FileRef opti = g.path("opti_speed_table", true);
-    if (!opti.empty()) gs.opti_speed_rpm = load_curve(opti, g.field("opti_speed_table"), ctx);
-    gs.ice = read_ice(g.sub("ice"), ctx);
-    gs.generator = read_drive(g.sub("generator"), ctx);
-    g.finish();
-  }
+  p.genset = read_genset(root.sub("genset"), ctx);
   p.request_W = read_trapezoid(root.sub("request"), "W");
   return p;
 }

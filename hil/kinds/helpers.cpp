@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "hil/kinds/kind.hpp"
 
+#include <numbers>
+
 namespace ehpt::hil::kinds {
 
 void need_cycle(const KindInput& in, Context& ctx) {
@@ -37,6 +39,29 @@ plant::Trapezoid read_trapezoid(Reader r, const std::string& unit) {
   t.period_s = r.number("period_s", 1e6);
   r.finish();
   return t;
+}
+
+plant::GensetParams read_genset(Reader g, Context& ctx) {
+  plant::GensetParams gs;
+  gs.gear_ratio = g.number("gear_ratio", gs.gear_ratio);
+  gs.throttle_per_rad_s = g.number("throttle_per_rad_s", gs.throttle_per_rad_s);
+  gs.gms_limits_torque = g.flag("gms_limits_torque", gs.gms_limits_torque);
+  const FileRef opti = g.path("opti_speed_table", !g.has("opti_speed_rad_s"));
+  if (!opti.empty()) gs.opti_speed_rpm = load_curve(opti, g.field("opti_speed_table"), ctx);
+  // one best speed for every request (the library's Level 1 genset: constOptimalSpeed)
+  if (g.has("opti_speed_rad_s")) {
+    const double w_rad_s = g.number("opti_speed_rad_s", 0.0);
+    if (!opti.empty()) {
+      ctx.error(ctx.where[g.field("opti_speed_rad_s")], g.field("opti_speed_rad_s"), plant::number_text(w_rad_s),
+                "give either opti_speed_table or opti_speed_rad_s, not both");
+    }
+    const double rpm = w_rad_s * 60.0 / (2.0 * std::numbers::pi);
+    gs.opti_speed_rpm = plant::Table1d({0.0, 1.0}, {rpm, rpm}, plant::Extrapolation::kHold);
+  }
+  gs.ice = read_ice(g.sub("ice"), ctx);
+  gs.generator = read_drive(g.sub("generator"), ctx);
+  g.finish();
+  return gs;
 }
 
 }  // namespace ehpt::hil::kinds

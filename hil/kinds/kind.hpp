@@ -18,6 +18,7 @@
 #include "hil/config/vehicle_kinds.hpp"
 #include "msgs/fields.hpp"
 #include "plant/drive_rigs.hpp"  // Trapezoid
+#include "plant/genset.hpp"
 #include "solvers/integrators.hpp"
 
 namespace ehpt::hil::kinds {
@@ -44,8 +45,11 @@ template <class Plant, class Controller = NoController>
 inline std::unique_ptr<Simulation> simulate(const Scenario& sc, const SimulationOptions& opt,
                                      std::unique_ptr<Plant> plant, std::unique_ptr<Controller> controller,
                                      double fuel_density_kg_m3 = 0.0) {
-  if constexpr (!std::is_same_v<Controller, NoController> && !is_codec_ecu<Controller>) {
-    // every built-in ECU talks through the codec seam (a pass-through unless ecu.codec = "can")
+  if constexpr (!std::is_same_v<Controller, NoController> && !is_codec_ecu<Controller> &&
+                requires { CanFramesOf<typename Plant::Sensors>::kCount; }) {
+    // every built-in ECU of a family with CAN frames talks through the codec seam (a
+    // pass-through unless ecu.codec = "can"); a family without them runs its ECU directly, and
+    // its reader refuses ecu.codec = "can"
     return simulate(sc, opt, std::move(plant),
                     std::make_unique<CodecEcu<Controller>>(std::move(controller), sc.ecu_codec == EcuCodec::kCan),
                     fuel_density_kg_m3);
@@ -72,6 +76,9 @@ std::optional<double> cycle_length(const plant::PropDriverParams& d);
 // A rig's trapezoid profile (plant::Trapezoid): offset_<unit>, amplitude_<unit>, start_s,
 // rising_s*, width_s, falling_s*, period_s (1e6); unit "Nm", "rad_s", "W".
 plant::Trapezoid read_trapezoid(Reader r, const std::string& unit);
+// The series hybrid's genset (plant::GensetParams): gear_ratio, throttle_per_rad_s,
+// gms_limits_torque, opti_speed_table, [ice], [generator].
+plant::GensetParams read_genset(Reader r, Context& ctx);
 // The EVs' built-in ECU, the driver-follower: an optional [ecu] table with its timing.
 void read_follower_ecu(Reader r, EcuTiming& timing, Context& ctx);
 

@@ -167,7 +167,7 @@ class FaultInjector {
           }
           if (s.effect == FaultEffect::kNoStart) {
             for (const auto& field : msgs::FieldTable<Inputs>::kFields) {
-              if (field.name == "icePowRef_W" || field.name == "iceTauRef_Nm") {
+              if (field.name == "icePowRef_W" || field.name == "iceTauRef_Nm" || field.name == "gensetPowRef_W") {
                 f.zero_sets[f.zero_count++] = field.set;
               }
             }
@@ -339,7 +339,7 @@ class FaultInjector {
     void (*sensor_set)(typename SensorsOf<Plant>::type&, double) = nullptr;
     Get<Inputs> command_get = nullptr;
     Set<Inputs> command_set = nullptr;
-    Set<Inputs> zero_sets[2] = {nullptr, nullptr};  // no_start: the engine's requests
+    Set<Inputs> zero_sets[2] = {nullptr, nullptr};  // no_start: the engine's requests (PSD 2, SHEV 1)
     int zero_count = 0;
   };
 

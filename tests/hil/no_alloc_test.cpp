@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "ecu/psd_ecu.hpp"
+#include "ecu/shev_ems.hpp"
 #include "alloc_counter.hpp"
 #include "hil/config/config.hpp"
 #include "ecu/ev_follower.hpp"
@@ -12,6 +13,7 @@
 #include "plant/bev_plant.hpp"
 #include "plant/drive_rigs.hpp"
 #include "plant/psd_plant.hpp"
+#include "plant/shev_plant.hpp"
 #include "solvers/integrators.hpp"
 #include "test_plants.hpp"
 
@@ -69,6 +71,37 @@ TEST(NoAllocation, PowerSplitHybridWithItsEcu) {
   EXPECT_EQ(runner.step_index(), 400000);
   EXPECT_EQ(runner.metrics().engine_starts, 2);
   EXPECT_EQ(runner.last_outputs().iceON, 0.0);
+}
+
+// The series hybrid with ShevEMS, both solvers, through a genset start (267.3 s) and stop (373.2 s).
+TEST(NoAllocation, SeriesHybridWithItsEms) {
+  const hil::Scenario sc = test::load(test::source_path("scenarios/shev_oo_sort1.toml"));
+  const plant::ShevPlant plant(sc.plant.get<plant::ShevParams>());
+  using P = plant::ShevPlant;
+  for (int solver = 0; solver < 2; ++solver) {
+    ecu::ShevEms ems(sc.ecu.get<ecu::ShevEmsParams>(), 0.01);
+    const auto runs = [&](auto integrator) {
+      using I = decltype(integrator);
+      Runner<P, I, ecu::ShevEms> runner(
+          plant, {.total_steps = 400000, .decimation = 100, .columns = {0, 1, 2}, .chunk_steps = 400000, .ecu_ratio = 10},
+          &ems);
+      const std::size_t before = test::allocation_count();
+      runner.run();
+      EXPECT_EQ(test::allocation_count() - before, 0u) << solver;
+      EXPECT_EQ(runner.metrics().engine_starts, 1) << solver;
+      EXPECT_EQ(runner.last_outputs().genset_on, 0.0) << solver;
+    };
+    if (solver == 0) {
+      runs(solvers::Rk4<P>(plant));
+    } else {
+      runs(solvers::ImplicitEuler<P>(plant));
+    }
+  }
+  const auto sim = make_simulation(test::load(test::source_path("scenarios/shev_oo_sort1.toml"), {"solver.duration_s=200"}),
+                                   SimulationOptions{{}, 200000});
+  const std::size_t before = test::allocation_count();
+  sim->run();
+  EXPECT_EQ(test::allocation_count() - before, 0u);
 }
 
 TEST(NoAllocation, DriveRig) {

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "ecu/psd_ecu.hpp"
+#include "ecu/shev_ems.hpp"
 #include "hil/config/config.hpp"
 #include "hil/config/scenario.hpp"
 #include "hil/run/simulation.hpp"
@@ -32,6 +33,7 @@
 #include "plant/genset_rig.hpp"
 #include "plant/machine_test_rigs.hpp"
 #include "plant/psd_plant.hpp"
+#include "plant/shev_plant.hpp"
 #include "test_plants.hpp"
 
 namespace ehpt::hil {
@@ -353,6 +355,23 @@ TEST(ValidationRules, EachVehicleChecksEachComponentAndItsOwnRules) {
                 {"planetary.ring_sun_ratio", "must be > 1", [](Psd& p) { p.ring_sun_ratio = 1.0; }},
                 {"brake.after_rotor_inertia", "only the map-based EV", [](Psd& p) { p.brake.after_rotor_inertia = true; }}});
 
+  using Shev = plant::ShevParams;
+  expect_rules(shipped<Shev>("shev_oo_sort1"), whole,
+               {{"vehicle.wheel_radius_m", kPositive, [](Shev& p) { p.body.wheel_radius_m = 0; }},
+                {"road.rolling_coefficient", kNonNegative, [](Shev& p) { p.road.rolling_coefficient = -1; }},
+                {"driver.request_max", kPositive, [](Shev& p) { p.driver.request_max = kNan; }},
+                {"battery.cells_series", "must be >= 1", [](Shev& p) { p.battery.cells_series = 0; }},
+                {"drive.speed_max_rad_s", kPositive, [](Shev& p) { p.drive.speed_max_rad_s = 0; }},
+                {"genset.generator.torque_max_Nm", kPositive, [](Shev& p) { p.genset.generator.torque_max_Nm = 0; }},
+                {"brake.after_rotor_inertia", "only the map-based EV", [](Shev& p) { p.brake.after_rotor_inertia = true; }},
+                {"genset.ice.input", "IceT01, run by its GMS through the throttle",
+                 [](Shev& p) { p.genset.ice.input = plant::IceInput::kPower; }}});
+  // OO_noMaps: the generator's one efficiency
+  expect_rules(shipped<Shev>("shev_oo_nomaps_sort1"), whole,
+               {{"genset.generator.efficiency", "must be in (0, 1]", [](Shev& p) { p.genset.generator.efficiency = 0; }},
+                {"genset.generator.efficiency", "must be in (0, 1]", [](Shev& p) { p.genset.generator.efficiency = 1.01; }},
+                {"genset.generator.efficiency", "must be in (0, 1]", [](Shev& p) { p.genset.generator.efficiency = kNan; }}});
+
   using Bev = plant::BevParams;
   expect_rules(shipped<Bev>("ev_sort1"), whole,
                {{"vehicle.gear_ratio", kPositive, [](Bev& p) { p.body.gear_ratio = 0; }},
@@ -399,6 +418,31 @@ TEST(ValidationRules, ThePowerSplitEcuRefusesEachOutOfRangeField) {
                 {"ecu.off_threshold_W", kFinite, [](E& e) { e.off_threshold_W = -kInf; }},
                 {"ecu.off_threshold_W", "(hysteresis)", [](E& e) { e.off_threshold_W = e.on_threshold_W; }},
                 {"ecu.ice_off_speed_ref_rad_s", kNonNegative, [](E& e) { e.ice_off_speed_ref_rad_s = -1; }}});
+}
+
+TEST(ValidationRules, TheSeriesHybridEmsRefusesEachOutOfRangeField) {
+  Scenario sc;
+  std::vector<std::string> errors;
+  ASSERT_TRUE(load_scenario(test::source_path("scenarios/shev_oo_sort1.toml"), {}, sc, errors));
+  using E = ecu::ShevEmsParams;
+  const auto check = [](const E& p, Problems& problems) { ecu::validate(p, "ecu", problems); };
+  expect_rules(sc.ecu.get<E>(), check,
+               {{"ecu.power_filter_s", kPositive, [](E& e) { e.power_filter_s = 0; }},
+                {"ecu.power_filter_initial_W", kFinite, [](E& e) { e.power_filter_initial_W = kNan; }},
+                {"ecu.soc_ref", "must be in [0, 1]", [](E& e) { e.soc_ref = -0.1; }},
+                {"ecu.soc_gain_W", kNonNegative, [](E& e) { e.soc_gain_W = -1; }},
+                {"ecu.power_max_W", kPositive, [](E& e) { e.power_max_W = 0; }},
+                {"ecu.on_W", kFinite, [](E& e) { e.on_W = kInf; }},
+                {"ecu.off_W", kFinite, [](E& e) { e.off_W = kNan; }},
+                {"ecu.off_W", "(hysteresis)", [](E& e) { e.off_W = e.on_W; }},
+                {"ecu.on_W", "the genset would never start", [](E& e) { e.on_W = e.power_max_W; }}});
+  // PowerFilt and PowerFiltSoc have no ON/OFF: their thresholds are not checked
+  E filt = sc.ecu.get<E>();
+  filt.kind = ecu::ShevEmsKind::kPowerFiltSoc;
+  filt.off_W = filt.on_W = kNan;
+  Problems none;
+  ecu::validate(filt, "ecu", none);
+  EXPECT_TRUE(none.empty()) << listed(none);
 }
 
 TEST(ValidationRules, ATableIsSortedFiniteAndLongEnough) {
@@ -479,7 +523,7 @@ TEST(ReaderRules, EachValueOfTheWrongKindIsNamed) {
            {"ev_sort1", {"vehicle=\"\""}, "vehicle = '': must be the name of a shipped vehicle (a non-empty string"},
            {"ev_sort1", {"vehicle=5"}, "vehicle = 5: must be a shipped vehicle's name (vehicle = \"psecu2\") or a table"},
            {"ev_sort1", {"solver.duration_s=-1"}, "must be a finite number > 0 s (give it, or a cycle whose last time stamp"},
-           {"ev_sort1", {"vehicle.drive.loss_model=\"magic\""}, "\"magic\": must be \"ideal\", \"map\" or \"formula\""},
+           {"ev_sort1", {"vehicle.drive.loss_model=\"magic\""}, "\"magic\": must be \"ideal\", \"map\", \"formula\" or \"constant\""},
            {"ev_sort1", {"vehicle.road.form=\"flat\""}, "\"flat\": must be \"coefficients\" or \"coast-down\""},
            {"psecu2_nedc", {"vehicle.ice.input=\"fuel\""}, "\"fuel\": must be \"power\" or \"torque\""},
            {"ev_sort1", {"output.decimation=1.5"}, "output.decimation = 1.5: must be a whole number"},
@@ -495,6 +539,22 @@ TEST(ReaderRules, EachValueOfTheWrongKindIsNamed) {
            {"ev_sort1", {"vehicle.battery.capacity_of_the_pack=5"}, "unknown key"},
            {"ev_sort1", {"vehicle.ecu.kind=\"MBecu2\""}, "must be \"follower\" (the built-in ECU of the EV"},
            {"psecu2_nedc", {"vehicle.ecu.kind=\"follower\""}, "must be \"MBecu1\", \"MBecu1soc\" or \"MBecu2\""},
+           {"shev_oo_sort1", {"vehicle.ecu.kind=\"MBecu2\""}, "must be \"PowerFilt\", \"PowerFiltSoc\" or \"ShevEMS\""},
+           {"shev_power_filt_sort1", {"vehicle.ecu.soc_gain_W=1e5"}, "PowerFilt has no SOC loop: use kind = \"PowerFiltSoc\""},
+           {"shev_power_filt_soc_sort1", {"vehicle.ecu.on_W=6e4"}, "only ShevEMS switches the genset on and off"},
+           {"shev_power_filt_soc_sort1", {"vehicle.ecu.off_W=3e4"}, "only ShevEMS switches the genset on and off"},
+           {"shev_oo_sort1", {"vehicle.ecu.codec=\"can\""}, "the series hybrid has no CAN message set in the contract yet"},
+           {"shev_oo_sort1", {"vehicle.genset.ice.on_off=false"}, "ShevEMS switches the genset off through gensetON", true},
+           {"shev_oo_nomaps_sort1", {"vehicle.genset.ice.sfc_map=\"" + test::source_path("data/maps/map_shev_ice_sfc.csv") + "\""},
+            "give either sfc_map or sfc_g_kWh, not both"},
+           {"shev_oo_nomaps_sort1",
+            {"vehicle.genset.ice.torque_max_table=\"" + test::source_path("data/maps/map_shev_ice_max_torque.csv") + "\""},
+            "give either torque_max_table or torque_max_Nm, not both"},
+           {"shev_oo_nomaps_sort1",
+            {"vehicle.genset.opti_speed_table=\"" + test::source_path("data/maps/map_shev_ice_opti_speed.csv") + "\""},
+            "give either opti_speed_table or opti_speed_rad_s, not both"},
+           {"shev_oo_sort1", {"vehicle.genset.generator.efficiency=0.9"}, "only loss_model = \"constant\" has one efficiency"},
+           {"shev_oo_nomaps_sort1", {"vehicle.genset.generator.efficiency=\"high\""}, "must be a number"},
            {"one_flange_test", {"vehicle.flanges=3"}, "flanges = 3: must be 1 or 2"},
            {"one_flange_test", {"cycle=\"" + test::source_path("data/cycles/cycle_sort1.csv") + "\""},
             "has no driver: remove the cycle"},

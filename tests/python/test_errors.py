@@ -77,6 +77,13 @@ class LoadErrors(unittest.TestCase):
         with self.assertRaises(ValueError) as cm:
             ehpt.Simulation("battery_cc_discharge", external_ecu=True)
         self.assertIn("no ECU", str(cm.exception))
+        # the series hybrid runs with its built-in EMS; its messages are not on the bus yet
+        with self.assertRaises(ValueError) as cm:
+            ehpt.Simulation("shev_oo_sort1", external_ecu=True)
+        self.assertIn("ECU messages are not in ehpt's bus contract yet", str(cm.exception))
+        r = ehpt.run("shev_oo_sort1", set={"solver.duration_s": 1})
+        self.assertEqual(r.exit_code, 0)
+        self.assertEqual(r.timeseries["genset_speed_rad_s"][0], 300.0)
 
 
 class SteppingErrors(unittest.TestCase):

@@ -709,6 +709,14 @@ class BadInput(BusTest):
         self.assertEqual(r.returncode, 2)
         self.assertIn("has no bus messages", r.stderr)
         self.no_folder(out)
+        # the series hybrid: its messages are not in the contract yet, for either command
+        r = run(["plant", "shev_oo_sort1", "--bus", "socketcand:127.0.0.1:%d" % port, "--out", str(out)])
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("the series hybrid's messages are not in the bus contract yet", r.stderr)
+        self.no_folder(out)
+        r = run(["ecu", "shev_oo_sort1", "--bus", "socketcand:127.0.0.1:%d" % port])
+        self.assertEqual(r.returncode, 2, r.stderr)
+        self.assertIn("ECU has no messages in the bus contract yet", r.stderr)
         # not a bus
         r = run(["plant", "ev_nedc", "--bus", "isotp:vcan0", "--out", str(out)])
         self.assertEqual(r.returncode, 1)

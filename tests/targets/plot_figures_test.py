@@ -50,6 +50,7 @@ RUNS = {
     "drive_rig": [("one_flange_test", 50), ("two_flange_test", 50)],
     "battery_rig": [("battery_cc_discharge", 60)],
     "genset_rig": [("genset_test2", 5), ("genset_test_oo", 8)],
+    "shev": [("shev_oo_sort1", 300)],  # the genset starts at 267.3 s
     "pm_drive_test": [("test_pm_drive", 0.5)],
     "am_drive_test": [("test_am_drive", 0.5)],
 }
