@@ -29,6 +29,10 @@ void validate(const ShevEmsParams& p, const std::string& at, Problems& problems)
     if (std::isfinite(p.on_W) && std::isfinite(p.off_W) && !(p.off_W < p.on_W)) {
       problems.add(at + ".off_W", number_text(p.off_W), "must be < on_W = " + number_text(p.on_W) + " (hysteresis)");
     }
+    if (std::isfinite(p.off_W) && !(p.off_W > 0.0)) {
+      problems.add(at + ".off_W", number_text(p.off_W),
+                   "must be > 0: P_c is clamped to >= 0, so it is never below off_W and the genset would never stop");
+    }
     if (std::isfinite(p.on_W) && p.on_W >= p.power_max_W) {
       problems.add(at + ".on_W", number_text(p.on_W),
                    "must be < power_max_W = " + number_text(p.power_max_W) +

@@ -61,7 +61,8 @@ class Genset {
 
   // Run phase: pure, no allocation. gen_torque_gain < 1: the generator derated (a plant fault,
   // plant/health.hpp), its torque bound x the gain.
-  GensetPoint operate(double power_ref_W, bool on, double speed_rad_s, double gen_torque_gain = 1.0) const;
+  // power_request_W: the genset's input (< 0 is taken as 0, its input limiter's P_ref).
+  GensetPoint operate(double power_request_W, bool on, double speed_rad_s, double gen_torque_gain = 1.0) const;
 
  private:
   GensetParams p_;

@@ -22,7 +22,8 @@
 //   eta is floored at 0.01 before dividing.
 // Loss formula (§1.5, V2/V3 form): Tu = |tau|/tau_max, Wu = |speed|/w_max,
 //   loss_pu = A + bT Tu^2 + bW Wu^2 + bP (Tu Wu)^2,  eta = Tu Wu / (Tu Wu + loss_pu).
-// Ideal: eta = 1 (the SMEHV/V2 default map [0,0,1;0,1,1;1,1,1]).
+// Ideal: eta = 1 (the SMEHV/V2 default map [0,0,1;0,1,1;1,1,1]). Constant: one eta everywhere
+// (the library's Level 1 genset generator, constGenEfficiency x that map).
 //
 // The DC interface is an ideal constant-power load (§1.6 recommendation); the battery node
 // is solved algebraically in battery_rc.hpp.

@@ -173,8 +173,7 @@ void ShevPlant::sense(double t_s, const State& x, const Modes& m, const Inputs& 
   s.locked = m.motion == Motion::kStuck;
 }
 
-void ShevPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const {
-  const Eval e = evaluate(x, m, u);
+void ShevPlant::outputs_from(const Eval& e, double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const {
   const double v = x[kSpeed], w = x[kGensetSpeed];
   const DriverOutput drv = drive(p_.driver, t_s, v);
   y.time_s = t_s;
@@ -216,9 +215,15 @@ void ShevPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs
   y.fault = faults(e, x);
 }
 
+void ShevPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const {
+  outputs_from(evaluate(x, m, u), t_s, x, m, u, y);
+}
+
+// one evaluation for both (the runner hands dx/dt to the next step as its first stage)
 void ShevPlant::outputs(double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y, State& dx) const {
-  outputs(t_s, x, m, u, y);
-  derivatives(t_s, x, m, u, dx);
+  const Eval e = evaluate(x, m, u);
+  outputs_from(e, t_s, x, m, u, y);
+  derivatives_from(e, x, dx);
 }
 
 double ShevPlant::kinetic_energy_J(const State& x) const {

@@ -141,6 +141,7 @@ class ShevPlant {
 
  private:
   void derivatives_from(const Eval& e, const State& x, State& dx) const;
+  void outputs_from(const Eval& e, double t_s, const State& x, const Modes& m, const Inputs& u, Outputs& y) const;
   unsigned faults(const Eval& e, const State& x) const;
   double kinetic_energy_J(const State& x) const;
 

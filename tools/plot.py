@@ -668,7 +668,7 @@ def family_of(cols):
         return "drive_rig"
     if "dc_power_W" in cols and "ice_speed_ref_rad_s" in cols:
         return "genset_rig"
-    if "genset_speed_rad_s" in cols:
+    if {"genset_speed_rad_s", "genset_power_dc_W", "genset_on", "genset_power_ref_W"} & cols.keys():
         return "shev"
     if "iceW_rad_s" in cols:
         return "psd"

@@ -302,7 +302,7 @@ bool has_bus_ecu(const Scenario& sc, std::string& why) {
   }
   why = sc.name + ": its vehicle (" + sc.vehicle_path + ")" +
         (sc.ecu.empty() ? " has no built-in ECU to run on the bus"
-                        : "'s ECU has no messages in the bus contract yet (the series hybrid): it cannot run on the bus");
+                        : "'s ECU has no messages in the bus contract yet: it cannot run on the bus");
   return false;
 }
 

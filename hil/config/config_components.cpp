@@ -74,10 +74,7 @@ plant::MapDriveParams read_drive(Reader r, Context& ctx) {
   }
   if (model != "map" && r.has("efficiency_map")) r.path("efficiency_map", false);  // allowed, unused
   if (model != "formula" && r.has("loss_formula")) r.sub("loss_formula");
-  if (model != "constant" && r.has("efficiency")) {
-    ctx.error(ctx.where[r.field("efficiency")], r.field("efficiency"), "(set)",
-              "only loss_model = \"constant\" has one efficiency: set it, or remove the key");
-  }
+  if (model != "constant" && r.has("efficiency")) r.number("efficiency", 0.0);  // allowed, unused (as efficiency_map)
   plausible_drive_rating(r, p.torque_max_Nm, p.power_max_W, p.speed_max_rad_s);
   r.plausible("inertia_kgm2", p.inertia_kgm2, kRotorInertiaBand.lo, kRotorInertiaBand.hi, "kg m^2", "a rotor's inertia");
   r.finish();
@@ -268,6 +265,9 @@ plant::MapIceParams read_ice(Reader r, Context& ctx) {
     if (!curve.empty()) {
       ctx.error(ctx.where[r.field("torque_max_Nm")], r.field("torque_max_Nm"), plant::number_text(t_Nm),
                 "give either torque_max_table or torque_max_Nm, not both");
+    } else if (!(t_Nm > 0.0) || !std::isfinite(t_Nm)) {
+      ctx.error(ctx.where[r.field("torque_max_Nm")], r.field("torque_max_Nm"), plant::number_text(t_Nm),
+                "must be a finite number > 0 (the engine's maximum torque at every speed)");
     }
     p.torque_max_Nm = plant::Table1d({0.0, 1.0}, {t_Nm, t_Nm}, plant::Extrapolation::kHold);
   }
@@ -278,7 +278,9 @@ plant::MapIceParams read_ice(Reader r, Context& ctx) {
     double peak_Nm = 0.0;
     for (const double t : p.torque_max_Nm.y()) peak_Nm = std::max(peak_Nm, t);
     if (std::isfinite(peak_Nm) && peak_Nm > 0.0 && (peak_Nm < kDriveTorqueBand.lo || peak_Nm > kDriveTorqueBand.hi)) {
-      ctx.warn(curve.path, r.field("torque_max"), plant::number_text(peak_Nm) + " N m (its peak)",
+      const bool constant = curve.empty();  // torque_max_Nm: the key's own line
+      ctx.warn(constant ? ctx.where[r.field("torque_max_Nm")] : curve.path,
+               constant ? r.field("torque_max_Nm") : r.field("torque_max"), plant::number_text(peak_Nm) + " N m (its peak)",
                "outside the plausible band [" + plant::number_text(kDriveTorqueBand.lo) + ", " +
                    plant::number_text(kDriveTorqueBand.hi) + "] N m of an engine's peak torque (a unit or a typo? " +
                    "it runs as given)");
@@ -292,6 +294,9 @@ plant::MapIceParams read_ice(Reader r, Context& ctx) {
     if (!sfc.empty()) {
       ctx.error(ctx.where[r.field("sfc_g_kWh")], r.field("sfc_g_kWh"), plant::number_text(sfc_g_kWh),
                 "give either sfc_map or sfc_g_kWh, not both");
+    } else if (!(sfc_g_kWh > 0.0) || !std::isfinite(sfc_g_kWh)) {
+      ctx.error(ctx.where[r.field("sfc_g_kWh")], r.field("sfc_g_kWh"), plant::number_text(sfc_g_kWh),
+                "must be a finite number > 0 (the specific consumption at every point)");
     }
     p.sfc_g_kWh = plant::Table2d({0.0, 1.0}, {0.0, 1.0}, {sfc_g_kWh, sfc_g_kWh, sfc_g_kWh, sfc_g_kWh});
   }

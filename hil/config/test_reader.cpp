@@ -663,7 +663,10 @@ void check_test_targets(std::span<const std::string_view> outputs, std::span<con
       // the engine's ON flag: the power-split hybrid's iceON, the series hybrid's gensetON
       if (f.target == "iceON" && !has(commands, "iceON") && has(commands, "gensetON")) f.target = "gensetON";
       if (!has(commands, f.target)) {
-        ctx.errors.push_back(f.where + ": " + field + ": kind = \"no_start\" acts on an engine; this vehicle has none");
+        const char* flag = has(commands, "iceON") ? "iceON" : has(commands, "gensetON") ? "gensetON" : nullptr;
+        ctx.errors.push_back(f.where + ": " + field + ": kind = \"no_start\" acts on an engine; " +
+                             (flag ? "this vehicle's engine flag is " + std::string(flag) + " (leave target out)"
+                                   : std::string("this vehicle has none")));
         continue;
       }
     }

@@ -45,7 +45,7 @@ plant::GensetParams read_genset(Reader g, Context& ctx) {
   plant::GensetParams gs;
   gs.gear_ratio = g.number("gear_ratio", gs.gear_ratio);
   gs.throttle_per_rad_s = g.number("throttle_per_rad_s", gs.throttle_per_rad_s);
-  gs.gms_limits_torque = g.flag("gms_limits_torque", gs.gms_limits_torque);
+
   const FileRef opti = g.path("opti_speed_table", !g.has("opti_speed_rad_s"));
   if (!opti.empty()) gs.opti_speed_rpm = load_curve(opti, g.field("opti_speed_table"), ctx);
   // one best speed for every request (the library's Level 1 genset: constOptimalSpeed)
@@ -54,11 +54,17 @@ plant::GensetParams read_genset(Reader g, Context& ctx) {
     if (!opti.empty()) {
       ctx.error(ctx.where[g.field("opti_speed_rad_s")], g.field("opti_speed_rad_s"), plant::number_text(w_rad_s),
                 "give either opti_speed_table or opti_speed_rad_s, not both");
+    } else if (!(w_rad_s > 0.0) || !std::isfinite(w_rad_s)) {
+      ctx.error(ctx.where[g.field("opti_speed_rad_s")], g.field("opti_speed_rad_s"), plant::number_text(w_rad_s),
+                "must be a finite number > 0 (the engine's best speed for every request)");
     }
     const double rpm = w_rad_s * 60.0 / (2.0 * std::numbers::pi);
     gs.opti_speed_rpm = plant::Table1d({0.0, 1.0}, {rpm, rpm}, plant::Extrapolation::kHold);
   }
   gs.ice = read_ice(g.sub("ice"), ctx);
+  // the GMS limits P / w to the engine's torque in the ON/OFF genset (GensetOO), not in the plain
+  // one (V3's Genset: 1e9 N m); the default follows the genset's kind
+  gs.gms_limits_torque = g.flag("gms_limits_torque", gs.ice.on_off);
   gs.generator = read_drive(g.sub("generator"), ctx);
   g.finish();
   return gs;

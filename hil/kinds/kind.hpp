@@ -77,7 +77,8 @@ std::optional<double> cycle_length(const plant::PropDriverParams& d);
 // rising_s*, width_s, falling_s*, period_s (1e6); unit "Nm", "rad_s", "W".
 plant::Trapezoid read_trapezoid(Reader r, const std::string& unit);
 // The series hybrid's genset (plant::GensetParams): gear_ratio, throttle_per_rad_s,
-// gms_limits_torque, opti_speed_table, [ice], [generator].
+// gms_limits_torque (default: ice.on_off), opti_speed_table or opti_speed_rad_s, [ice],
+// [generator].
 plant::GensetParams read_genset(Reader r, Context& ctx);
 // The EVs' built-in ECU, the driver-follower: an optional [ecu] table with its timing.
 void read_follower_ecu(Reader r, EcuTiming& timing, Context& ctx);

@@ -30,9 +30,11 @@ ecu::ShevEmsParams read_shev_ems(Reader r, EcuTiming& timing, Context& ctx) {
   // PowerFilt has no SOC loop and the first two no ON/OFF: their keys would do nothing
   if (p.kind == ecu::ShevEmsKind::kPowerFilt) {
     p.soc_gain_W = 0.0;
-    if (r.has("soc_gain_W")) {
-      ctx.error(ctx.where[r.field("soc_gain_W")], r.field("soc_gain_W"), "(set)",
-                "PowerFilt has no SOC loop: use kind = \"PowerFiltSoc\", or remove the key");
+    for (const char* key : {"soc_ref", "soc_gain_W"}) {
+      if (r.find(key) != nullptr) {  // find: the key's line, and not also "unknown"
+        ctx.error(ctx.where[r.field(key)], r.field(key), "(set)",
+                  "PowerFilt has no SOC loop: use kind = \"PowerFiltSoc\", or remove the key");
+      }
     }
   } else {
     p.soc_ref = r.required_number("soc_ref");
@@ -43,7 +45,7 @@ ecu::ShevEmsParams read_shev_ems(Reader r, EcuTiming& timing, Context& ctx) {
     p.off_W = r.required_number("off_W");
   } else {
     for (const char* key : {"on_W", "off_W"}) {
-      if (r.has(key)) {
+      if (r.find(key) != nullptr) {
         ctx.error(ctx.where[r.field(key)], r.field(key), "(set)",
                   "only ShevEMS switches the genset on and off: use kind = \"ShevEMS\", or remove the key");
       }

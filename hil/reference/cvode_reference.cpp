@@ -417,7 +417,7 @@ bool run_cvode_reference(const Scenario& sc, const ReferenceOptions& opt, Refere
     const plant::EvAmPlant plant(*p);
     return run_with(sc, opt, plant, std::make_unique<ecu::EvFollower>(), out, why);
   }
-  why = "kind " + sc.kind + ": no CVODE reference (it covers the vehicles with a built-in ECU: bev, psd, ev_pm, ev_am)";
+  why = "kind " + sc.kind + ": no CVODE reference (it covers bev, psd, ev_pm and ev_am)";
   return false;
 }
 

@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <iterator>
 #include <limits>
 #include <span>
 #include <string_view>
@@ -167,7 +168,8 @@ class FaultInjector {
           }
           if (s.effect == FaultEffect::kNoStart) {
             for (const auto& field : msgs::FieldTable<Inputs>::kFields) {
-              if (field.name == "icePowRef_W" || field.name == "iceTauRef_Nm" || field.name == "gensetPowRef_W") {
+              const bool request = field.name == "icePowRef_W" || field.name == "iceTauRef_Nm" || field.name == "gensetPowRef_W";
+              if (request && f.zero_count < static_cast<int>(std::size(f.zero_sets))) {
                 f.zero_sets[f.zero_count++] = field.set;
               }
             }

@@ -374,7 +374,7 @@ TEST_F(VehicleFiles, AnUnknownNameListsTheShippedVehiclesAndSuggestsTheClosest) 
   ASSERT_EQ(errors.size(), 1u) << all(errors);
   EXPECT_EQ(errors[0].rfind(s + ":1: vehicle = \"psceu2\": no shipped vehicle of that name (in ", 0), 0u) << errors[0];
   EXPECT_NE(errors[0].find("the vehicles are battery_rig_mbev, evam_bat, evam_pu_bat, evpm_bat, mbev, psecu1, psecu1soc, "
-                           "psecu2, test_am_drive"),
+                           "psecu2, shev_oo, shev_oo_nomaps, shev_power_filt, shev_power_filt_soc, test_am_drive"),
             std::string::npos)
       << errors[0];
   EXPECT_TRUE(errors[0].ends_with("; did you mean \"psecu2\"?")) << errors[0];

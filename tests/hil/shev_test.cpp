@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The series hybrid (MODELS.md §5.5, §10.6): its EMS on its own (the filter, the clamp, the
-// ON/OFF hysteresis at the sampling instants), and the library's three examples on Sort1 through
-// the shipped scenarios: what each run gives with the model files' parameters, the energy audit,
-// the vehicle files' numbers read back. Where the library's tutorial quotes other figures, the
-// test says which and why (docs/scenarios.md, "Series hybrid").
+// ON/OFF hysteresis at the sampling instants), and the library's examples (and OO_noMaps) on Sort1
+// and NEDC through the shipped scenarios: what each run gives with the model files' parameters,
+// the energy audit, the faults, the vehicle files' numbers read back. Where the library's tutorial
+// quotes other figures, the test says which and why (docs/validation.md, "Series hybrid").
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -159,6 +159,9 @@ TEST(ShevPowerFiltOnSort1, FollowsTheBusCycleAndTheGensetDeliversTheAveragePower
   // tutorial's 120 kW is not what the model files give: eta = 1 and k = 500)
   EXPECT_NEAR(max_of(y.at("drive_power_dc_W")), 104790.0, 100.0);
   EXPECT_EQ(max_of(y.at("drive_limit_state")), 1.0);  // power region, never cut: the request stays below the limit
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    ASSERT_EQ(y.at("drive_torque_Nm")[i], y.at("drive_torque_ref_Nm")[i]) << "t = " << t[i];
+  }
   // the genset follows the 500 s average of the drive's power (5.09 kW over a period), starting
   // from the filter's 20 kW: 11.50 kW of engine power at 400 s
   double avg_W = 0.0;
@@ -240,19 +243,32 @@ TEST(ShevOOOnSort1, TheGensetStartsAbove60kWStopsBelow30kWAndNeverPassesItsLimit
   EXPECT_LE(std::abs(a.residual_J), 1e-9 * a.scale_J);
 }
 
-// OO against PowerFiltSoc at equal final SOC: SHEV_OO with socRef 0.58 ends near PowerFiltSoc's
-// 0.500 and burns 46 % of its fuel (the always-on genset spends most of the run at 3-5 kW, far
-// from its efficient region).
+// OO against PowerFiltSoc, the comparison (SHEV_OO with socRef 0.58): SHEV_OO ends at
+// SOC 0.487, PowerFiltSoc at 0.500, and OO burns 46 % of its fuel, 50 % with each battery's
+// stored-energy change counted as fuel (the always-on genset spends most of the run at 3-5 kW,
+// far from its efficient region).
 TEST(ShevOOOnSort1, BurnsLessFuelThanPowerFiltSocAtEqualFinalSoc) {
   plant::EnergyAudit oo_a, soc_a;
   const auto oo = run_all("scenarios/shev_oo_sort1.toml", {"output.interval_s=100", "vehicle.ecu.soc_ref=0.58"}, &oo_a);
   const auto fs = run_all("scenarios/shev_power_filt_soc_sort1.toml", {"output.interval_s=100"}, &soc_a);
   const double soc_oo = oo.at("soc").back(), soc_fs = fs.at("soc").back();
   EXPECT_NEAR(soc_fs, 0.5003, 1e-4);
-  EXPECT_NEAR(soc_oo, soc_fs, 0.02);
-  // the SOC difference is worth about 120 Wh of the 100-cell pack, some 40 g of fuel: far less
-  // than the difference
-  EXPECT_LT(oo.at("fuel_g").back() + 100.0, 0.6 * fs.at("fuel_g").back());
+  EXPECT_NEAR(soc_oo, 0.4873, 1e-4);
+  // The packs differ (100 and 200 cells), so equal SOC is not equal energy: compare fuel with each
+  // battery's stored-energy change charged as fuel at a pessimistic 25 % (engine x generator; the
+  // genset's best is about 35 %)
+  const auto stored_out_J = [](const plant::EnergyAudit& a) {
+    for (const auto& [name, value] : a.terms) {
+      if (name == "battery_stored_out_J") return value;
+    }
+    return std::nan("");
+  };
+  const auto equivalent_g = [&](double fuel_g, const plant::EnergyAudit& a) {
+    return fuel_g + 1e3 * stored_out_J(a) / (0.25 * 43e6);
+  };
+  const double oo_g = equivalent_g(oo.at("fuel_g").back(), oo_a), fs_g = equivalent_g(fs.at("fuel_g").back(), soc_a);
+  EXPECT_LT(std::abs(oo_g - oo.at("fuel_g").back()), 100.0) << "the correction is small against the difference";
+  EXPECT_LT(oo_g, 0.6 * fs_g);
   EXPECT_NEAR(oo.at("fuel_g").back(), 696.3, 0.1);
   EXPECT_NEAR(fs.at("fuel_g").back(), 1525.8, 0.1);
 }
@@ -319,15 +335,13 @@ TEST(Shev, TheEmsReadsTheDrivesDcPowerAndTheGensetFeedsTheBus) {
 TEST(ShevOONoMapsOnSort1, TheGensetWithoutMapsBurns200gPerKWhAndDelivers85Percent) {
   plant::EnergyAudit a;
   const auto y = run_all("scenarios/shev_oo_nomaps_sort1.toml", {"output.interval_s=0.1"}, &a);
-  double work_J = 0.0, fuel_J = 0.0;
+  double work_J = 0.0;
   for (const auto& [name, value] : a.terms) {
     if (name == "engine_work_J") work_J = value;
-    if (name == "fuel_chemical_J") fuel_J = value;
   }
   ASSERT_GT(work_J, 1e7);
   const double fuel_g = y.at("fuel_g").back();
   EXPECT_NEAR(fuel_g, 200.0 * work_J / 3.6e6, 1e-6 * fuel_g);
-  EXPECT_NEAR(fuel_J, fuel_g * 1e-3 * 43e6, 1e-6 * fuel_J);
   std::size_t generating = 0;
   const auto& t = y.at("time_s");
   for (std::size_t i = 0; i < t.size(); ++i) {
@@ -335,7 +349,7 @@ TEST(ShevOONoMapsOnSort1, TheGensetWithoutMapsBurns200gPerKWhAndDelivers85Percen
     if (mech_W > 1000.0) {
       ++generating;
       ASSERT_NEAR(y.at("genset_power_dc_W")[i], 0.85 * mech_W, 1e-9 * mech_W) << "t = " << t[i];
-      ASSERT_EQ(y.at("genset_speed_ref_rad_s")[i], 100.0) << "t = " << t[i];
+      ASSERT_NEAR(y.at("genset_speed_ref_rad_s")[i], 100.0, 1e-12) << "t = " << t[i];
       ASSERT_EQ(y.at("ice_torque_max_Nm")[i], 550.0) << "t = " << t[i];
     }
   }
@@ -374,11 +388,32 @@ TEST(ShevFaults, NoStartKeepsTheGensetOffAndDeratingCutsTheGeneratorsPower) {
   EXPECT_NEAR(mech_W, 22500.0, 1e-6 * 22500.0);
   EXPECT_LT(derated.at("soc").back(), healthy.at("soc").back());
   EXPECT_EQ(max_of(derated.at("faults_active")), 1.0);
-  // the faults' names and targets: no_start on a vehicle with the series hybrid's gensetON
-  Scenario named;
+  // the flag named: the same as the default
+  const auto named = run_faulted("scenarios/shev_oo_sort1.toml", sets, {"kind=no_start target=gensetON at_s=0"});
+  EXPECT_EQ(named.at("soc"), off.at("soc"));
+  // a flag of another vehicle is named as such
+  Scenario sc;
   std::vector<std::string> errors;
-  EXPECT_TRUE(load_scenario(test::source_path("scenarios/shev_oo_sort1.toml"), sets,
-                            {"kind=no_start target=gensetON at_s=0"}, named, errors));
+  EXPECT_FALSE(load_scenario(test::source_path("scenarios/shev_oo_sort1.toml"), sets,
+                             {"kind=no_start target=iceTauRef_Nm at_s=0"}, sc, errors));
+  ASSERT_FALSE(errors.empty());
+  EXPECT_NE(errors[0].find("acts on the engine: leave target out"), std::string::npos) << errors[0];
+  EXPECT_FALSE(load_scenario(test::source_path("scenarios/psecu2_nedc.toml"), sets,
+                             {"kind=no_start target=gensetON at_s=0"}, sc, errors));
+  ASSERT_FALSE(errors.empty());
+  EXPECT_NE(errors.back().find("this vehicle's engine flag is iceON"), std::string::npos) << errors.back();
+}
+
+// A key the EMS's kind would ignore is one error, on its own line, not also an unknown key.
+TEST(Shev, AnEmsKeyTheKindIgnoresIsOneError) {
+  for (const char* set : {"vehicle.ecu.soc_gain_W=1e5", "vehicle.ecu.soc_ref=0.5", "vehicle.ecu.on_W=6e4"}) {
+    Scenario sc;
+    std::vector<std::string> errors;
+    EXPECT_FALSE(load_scenario(test::source_path("scenarios/shev_power_filt_sort1.toml"), {set}, sc, errors));
+    ASSERT_EQ(errors.size(), 1u) << set << ": " << (errors.empty() ? "" : errors[0] + " | " + errors.back());
+    EXPECT_EQ(errors[0].find("unknown key"), std::string::npos) << errors[0];
+    EXPECT_EQ(errors[0].rfind("--set ", 0), 0u) << "located at the override: " << errors[0];
+  }
 }
 
 // The GMS (genset.hpp): a negative request is taken as 0 (the Genset's input limiter), and

@@ -435,7 +435,8 @@ TEST(ValidationRules, TheSeriesHybridEmsRefusesEachOutOfRangeField) {
                 {"ecu.on_W", kFinite, [](E& e) { e.on_W = kInf; }},
                 {"ecu.off_W", kFinite, [](E& e) { e.off_W = kNan; }},
                 {"ecu.off_W", "(hysteresis)", [](E& e) { e.off_W = e.on_W; }},
-                {"ecu.on_W", "the genset would never start", [](E& e) { e.on_W = e.power_max_W; }}});
+                {"ecu.on_W", "the genset would never start", [](E& e) { e.on_W = e.power_max_W; }},
+                {"ecu.off_W", "the genset would never stop", [](E& e) { e.off_W = 0; }}});
   // PowerFilt and PowerFiltSoc have no ON/OFF: their thresholds are not checked
   E filt = sc.ecu.get<E>();
   filt.kind = ecu::ShevEmsKind::kPowerFiltSoc;
@@ -553,7 +554,10 @@ TEST(ReaderRules, EachValueOfTheWrongKindIsNamed) {
            {"shev_oo_nomaps_sort1",
             {"vehicle.genset.opti_speed_table=\"" + test::source_path("data/maps/map_shev_ice_opti_speed.csv") + "\""},
             "give either opti_speed_table or opti_speed_rad_s, not both"},
-           {"shev_oo_sort1", {"vehicle.genset.generator.efficiency=0.9"}, "only loss_model = \"constant\" has one efficiency"},
+           {"shev_power_filt_sort1", {"vehicle.ecu.soc_ref=0.5"}, "PowerFilt has no SOC loop: use kind = \"PowerFiltSoc\""},
+           {"shev_oo_nomaps_sort1", {"vehicle.genset.ice.torque_max_Nm=0"}, "torque_max_Nm = 0: must be a finite number > 0"},
+           {"shev_oo_nomaps_sort1", {"vehicle.genset.ice.sfc_g_kWh=-1"}, "sfc_g_kWh = -1: must be a finite number > 0"},
+           {"shev_oo_nomaps_sort1", {"vehicle.genset.opti_speed_rad_s=-10"}, "opti_speed_rad_s = -10: must be a finite number > 0"},
            {"shev_oo_nomaps_sort1", {"vehicle.genset.generator.efficiency=\"high\""}, "must be a number"},
            {"one_flange_test", {"vehicle.flanges=3"}, "flanges = 3: must be 1 or 2"},
            {"one_flange_test", {"cycle=\"" + test::source_path("data/cycles/cycle_sort1.csv") + "\""},

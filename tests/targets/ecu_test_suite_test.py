@@ -87,6 +87,10 @@ with tempfile.TemporaryDirectory() as tmp:
           "fault" not in names and "locked" not in names, f"ehpt signals --fault-targets: the message fields ({names})")
     rc, out, err = run(["signals", "battery_cc_discharge", "--fault-targets"])
     check(rc == 2 and "no ECU messages" in err, f"... and a rig has none (exit {rc})")
+    rc, out, err = run(["signals", "shev_oo_sort1", "--fault-targets"])
+    names = [l.split()[0] for l in out.splitlines() if l.startswith("  ")]
+    check(rc == 0 and "drivePowDc_W" in names and "gensetPowRef_W" in names and "gensetON" in names and
+          "fault" not in names and "bus: none" in out, f"... the series hybrid's message fields, no bus ({names})")
 
     # a failing and a passing test
     base = os.path.join(SRC, "scenarios", "psecu2_nedc.toml")
