@@ -132,6 +132,12 @@ class BatteryRc {
   double healthy_stored_energy_J(double emf_V, double v_rc_V) const {
     return 0.5 * healthy_.c_batt_F * emf_V * emf_V + 0.5 * healthy_.c1_F * v_rc_V * v_rc_V;
   }
+  // What the pack gave out (losses included) from (emf0, v_rc0), the pack as built, to (emf,
+  // v_rc), the pack as it is now: what plant faults took from the capacitors when they shrank
+  // (a lost string, capacity fade) is no energy the pack gave out. Every vehicle's audit.
+  double stored_out_J(double emf0_V, double v_rc0_V, double emf_V, double v_rc_V) const {
+    return healthy_stored_energy_J(emf0_V, v_rc0_V) - stored_energy_J(emf_V, v_rc_V) - removed_by_faults_J_;
+  }
   // §6.4 run-time asserts: SOC window and cell current.
   bool soc_in_window(double emf_V) const {
     const double s = soc(emf_V);

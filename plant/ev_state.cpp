@@ -10,10 +10,7 @@ EnergyAudit ev_energy_audit(const BatteryRc& battery, double mass_eff_kg, double
   const double fault_removed_J = battery.removed_by_faults_J();
   using L = EvStateLayout;
   const auto delta = [&](int i) { return x[i] - x0[i]; };
-  // x0 with the pack as built, x with the pack as it is now; what plant faults took from the
-  // capacitors when they shrank (a lost string, capacity fade) is no energy the pack gave out
-  const double stored_out_J = battery.healthy_stored_energy_J(x0[L::kEmf], x0[L::kVrc]) -
-                              battery.stored_energy_J(x[L::kEmf], x[L::kVrc]) - fault_removed_J;
+  const double stored_out_J = battery.stored_out_J(x0[L::kEmf], x0[L::kVrc], x[L::kEmf], x[L::kVrc]);
   const double kinetic_J = 0.5 * mass_eff_kg * (x[L::kSpeed] * x[L::kSpeed] - x0[L::kSpeed] * x0[L::kSpeed]);
   const double potential_J = mass_kg * kGravity_m_s2 * delta(L::kAltitude);
   EnergyAudit a;

@@ -235,9 +235,7 @@ double PsdPlant::kinetic_energy_J(const State& x) const {
 
 EnergyAudit PsdPlant::audit(const State& x0, const State& x) const {
   const auto delta = [&](int i) { return x[i] - x0[i]; };
-  // x0 with the pack as built, x as it is now, less what plant faults took from the capacitors
-  const double stored_out_J = battery_.healthy_stored_energy_J(x0[kEmf], x0[kVrc]) -
-                              battery_.stored_energy_J(x[kEmf], x[kVrc]) - battery_.removed_by_faults_J();
+  const double stored_out_J = battery_.stored_out_J(x0[kEmf], x0[kVrc], x[kEmf], x[kVrc]);
   const double fuel_J = p_.ice.fuel_lhv_J_kg * delta(kFuelKg);
   const double ice_work_J = delta(kIceWorkJ);
   const double kinetic_J = kinetic_energy_J(x) - kinetic_energy_J(x0);
