@@ -18,35 +18,19 @@
 #include <vector>
 
 #include "hil/config/config.hpp"
-#include "hil/run/simulation.hpp"
 #include "plant/genset_rig.hpp"
 #include "test_plants.hpp"
 
 namespace ehpt::hil {
 namespace {
 
-// Every signal at every plant step: name -> values.
+// Every signal at every output row (test::run_columns): name -> values.
 std::map<std::string, std::vector<double>> run_all(const std::string& scenario, const std::vector<std::string>& sets = {}) {
-  std::vector<std::string> errors;
-  SimulationOptions opt;
-  auto sim = load_simulation(test::source_path(scenario), sets, opt, errors);
-  EXPECT_NE(sim, nullptr) << (errors.empty() ? "" : errors[0]);
-  std::map<std::string, std::vector<double>> cols;
-  if (!sim) return cols;
-  const auto signals = sim->signals();
-  while (!sim->finished()) {
-    sim->run();
-    const auto rows = sim->rows();
-    for (std::size_t i = 0; i + signals.size() <= rows.size(); i += signals.size()) {
-      for (std::size_t j = 0; j < signals.size(); ++j) cols[std::string(signals[j].name)].push_back(rows[i + j]);
-    }
-    sim->clear_rows();
-  }
-  const plant::EnergyAudit a = sim->audit();
-  EXPECT_LE(std::abs(a.residual_J), 1e-9 * a.scale_J) << scenario << ": the energy audit closes";
-  EXPECT_GT(a.scale_J, 1e5) << "the engine did work";
-  EXPECT_EQ(sim->stats().fault, 0u);
-  return cols;
+  test::RunColumns r = test::run_columns(scenario, sets);
+  EXPECT_LE(std::abs(r.audit.residual_J), 1e-9 * r.audit.scale_J) << scenario << ": the energy audit closes";
+  EXPECT_GT(r.audit.scale_J, 1e5) << "the engine did work";
+  EXPECT_EQ(r.fault, 0u);
+  return std::move(r.y);
 }
 
 // The first time at which column c changes to a value v (NaN if never).

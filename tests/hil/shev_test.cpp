@@ -16,9 +16,7 @@
 
 #include "ecu/shev_ems.hpp"
 #include "hil/config/config.hpp"
-#include "hil/run/batch.hpp"
 #include "hil/run/runner.hpp"
-#include "hil/run/simulation.hpp"
 #include "plant/shev_plant.hpp"
 #include "solvers/integrators.hpp"
 #include "test_plants.hpp"
@@ -114,29 +112,16 @@ TEST(ShevEms, TheGensetStartsAbove60kWAndStopsBelow30kWAtTheFirstSampleBeyond) {
   EXPECT_FALSE(switches[1].second);
 }
 
-// Every signal at every output row of a shipped scenario: name -> values.
+// Every signal at every output row of a shipped scenario (test::run_columns), its audit closed
+// and no fault: name -> values.
 std::map<std::string, std::vector<double>> run_all(const std::string& scenario, const std::vector<std::string>& sets,
-                                                   plant::EnergyAudit* audit = nullptr) {
-  std::vector<std::string> errors;
-  SimulationOptions opt;
-  auto sim = load_simulation(test::source_path(scenario), sets, opt, errors);
-  EXPECT_NE(sim, nullptr) << (errors.empty() ? "" : errors[0]);
-  std::map<std::string, std::vector<double>> cols;
-  if (!sim) return cols;
-  const auto signals = sim->signals();
-  while (!sim->finished()) {
-    sim->run();
-    const auto rows = sim->rows();
-    for (std::size_t i = 0; i + signals.size() <= rows.size(); i += signals.size()) {
-      for (std::size_t j = 0; j < signals.size(); ++j) cols[std::string(signals[j].name)].push_back(rows[i + j]);
-    }
-    sim->clear_rows();
-  }
-  const plant::EnergyAudit a = sim->audit();
-  EXPECT_LE(std::abs(a.residual_J), 1e-9 * a.scale_J) << scenario << ": the energy audit closes";
-  EXPECT_EQ(sim->stats().fault, 0u);
-  if (audit != nullptr) *audit = a;
-  return cols;
+                                                   plant::EnergyAudit* audit = nullptr,
+                                                   const std::vector<std::string>& faults = {}) {
+  test::RunColumns r = test::run_columns(scenario, sets, faults);
+  EXPECT_LE(std::abs(r.audit.residual_J), 1e-9 * r.audit.scale_J) << scenario << ": the energy audit closes";
+  EXPECT_EQ(r.fault, 0u);
+  if (audit != nullptr) *audit = r.audit;
+  return std::move(r.y);
 }
 
 double max_of(const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); }
@@ -282,16 +267,10 @@ TEST(ShevOnNedc, TwoBusesStopWithTheirFaultNamedThe200CellOneRunsTheCycle) {
   for (const auto& [scenario, fault, step] :
        {std::tuple{"scenarios/shev_power_filt_nedc.toml", plant::kFaultSocWindow, std::int64_t{1122883}},
         std::tuple{"scenarios/shev_oo_nedc.toml", plant::kFaultCellCurrent, std::int64_t{1132830}}}) {
-    std::vector<std::string> errors;
-    auto sim = load_simulation(test::source_path(scenario), {"output.interval_s=100"}, SimulationOptions{}, errors);
-    ASSERT_NE(sim, nullptr) << (errors.empty() ? "" : errors[0]);
     test::ExpectFault expect;
-    while (!sim->finished()) {
-      sim->run();
-      sim->clear_rows();
-    }
-    EXPECT_EQ(sim->stats().fault, static_cast<unsigned>(fault)) << scenario;
-    EXPECT_EQ(sim->step_index(), step) << scenario;
+    const test::RunColumns r = test::run_columns(scenario, {"output.interval_s=100"});
+    EXPECT_EQ(r.fault, static_cast<unsigned>(fault)) << scenario;
+    EXPECT_EQ(r.steps, step) << scenario;
   }
   const auto y = run_all("scenarios/shev_power_filt_soc_nedc.toml", {"output.interval_s=8"});
   EXPECT_EQ(y.at("time_s").back(), 1184.0);
@@ -361,15 +340,7 @@ TEST(ShevOONoMapsOnSort1, TheGensetWithoutMapsBurns200gPerKWhAndDelivers85Percen
 // its request 0: the engine never runs) and derating the generator (its torque bound x gain).
 std::map<std::string, std::vector<double>> run_faulted(const char* scenario, const std::vector<std::string>& sets,
                                                        const std::vector<std::string>& faults) {
-  Scenario sc;
-  std::vector<std::string> errors;
-  EXPECT_TRUE(load_scenario(test::source_path(scenario), sets, faults, sc, errors)) << (errors.empty() ? "" : errors[0]);
-  const MemoryRun r = run_in_memory(sc);  // as the CLI runs it (a faulted run adds faults_active)
-  std::map<std::string, std::vector<double>> cols;
-  for (std::size_t i = 0; i + r.columns.size() <= r.rows.size(); i += r.columns.size()) {
-    for (std::size_t j = 0; j < r.columns.size(); ++j) cols[r.columns[j]].push_back(r.rows[i + j]);
-  }
-  return cols;
+  return run_all(scenario, sets, nullptr, faults);  // a faulted run has faults_active last
 }
 
 TEST(ShevFaults, NoStartKeepsTheGensetOffAndDeratingCutsTheGeneratorsPower) {

@@ -9,6 +9,7 @@
 
 #include "hil/config/config.hpp"
 #include "hil/run/runner.hpp"
+#include "hil/run/simulation.hpp"
 
 namespace ehpt::test {
 
@@ -54,6 +55,35 @@ std::filesystem::path scratch_root() {
   };
   static const Root root;
   return root.path;
+}
+
+RunColumns run_columns(const std::string& scenario, const std::vector<std::string>& overrides,
+                       const std::vector<std::string>& faults) {
+  RunColumns r;
+  hil::Scenario sc;
+  std::vector<std::string> errors;
+  if (!hil::load_scenario(source_path(scenario), overrides, faults, sc, errors)) {
+    ADD_FAILURE() << scenario << ": " << (errors.empty() ? "" : errors[0]);
+    return r;
+  }
+  const std::vector<hil::SignalInfo> signals = hil::scenario_signals(sc);
+  const std::vector<int> columns = hil::chosen_columns(sc, signals);
+  std::vector<std::string> names;
+  for (const int c : columns) names.emplace_back(signals[static_cast<std::size_t>(c)].name);
+  if (!sc.faults.empty()) names.emplace_back("faults_active");
+  const auto sim = hil::make_simulation(sc, hil::SimulationOptions{columns});
+  while (!sim->finished()) {
+    sim->run();
+    const auto rows = sim->rows();
+    for (std::size_t i = 0; i + names.size() <= rows.size(); i += names.size()) {
+      for (std::size_t j = 0; j < names.size(); ++j) r.y[names[j]].push_back(rows[i + j]);
+    }
+    sim->clear_rows();
+  }
+  r.audit = sim->audit();
+  r.fault = sim->stats().fault;
+  r.steps = sim->step_index();
+  return r;
 }
 
 hil::Scenario load(const std::string& path, const std::vector<std::string>& overrides) {

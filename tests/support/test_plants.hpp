@@ -2,8 +2,11 @@
 #pragma once
 // Parameter sets shared by several tests (the shipped MBEV, a coast-down vehicle, cycles).
 
+#include <cstdint>
 #include <filesystem>
+#include <map>
 #include <string>
+#include <vector>
 
 #include "hil/config/config.hpp"
 #include "plant/bev_plant.hpp"
@@ -30,6 +33,19 @@ std::filesystem::path scratch_root();
 
 // A scenario through the real loader (aborts the test on problems).
 hil::Scenario load(const std::string& path, const std::vector<std::string>& overrides = {});
+
+// A scenario (a path under the source tree) run to its end through make_simulation: every
+// recorded column by name, as timeseries.csv names them (faults_active last when there are
+// faults), with the run's energy audit, its first fault and its last step. A load error fails
+// the test and gives empty columns.
+struct RunColumns {
+  std::map<std::string, std::vector<double>> y;
+  plant::EnergyAudit audit;
+  unsigned fault = 0;
+  std::int64_t steps = 0;
+};
+RunColumns run_columns(const std::string& scenario, const std::vector<std::string>& overrides = {},
+                       const std::vector<std::string>& faults = {});
 
 // MBEV as in vehicles/mbev.toml, loaded through the real loader with the given cycle.
 plant::BevParams mbev(const std::string& cycle_file = "data/cycles/cycle_sort1.csv");
