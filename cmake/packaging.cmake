@@ -30,14 +30,15 @@ set(EHPT_DATA_INSTALL_DIR ${CMAKE_INSTALL_DATADIR}/ehpt)
 # scenarios name their vehicle and cycle relative to themselves (../vehicles, ../data): the
 # four folders keep their places side by side
 install(DIRECTORY scenarios vehicles data campaigns DESTINATION ${EHPT_DATA_INSTALL_DIR} COMPONENT runtime)
-install(FILES io/can/ehpt.dbc io/can/ehpt-psd.binding.toml io/can/ehpt-ev.binding.toml DESTINATION ${EHPT_DATA_INSTALL_DIR}/can COMPONENT runtime)
+install(FILES io/can/ehpt.dbc io/can/ehpt-psd.binding.toml io/can/ehpt-ev.binding.toml io/can/ehpt-shev.binding.toml DESTINATION ${EHPT_DATA_INSTALL_DIR}/can COMPONENT runtime)
 install(FILES ${EHPT_LCM_SOURCES} DESTINATION ${EHPT_DATA_INSTALL_DIR}/lcm COMPONENT runtime)
 
 # The ECUs of one's own to start from, as documentation (not executable: one copies them):
 # on CAN with python-can (and the DBC reader it imports), in process in Python, on LCM in C++,
 # and a C++ harness against the installed CMake package.
 set(EHPT_EXAMPLES_INSTALL_DIR ${CMAKE_INSTALL_DOCDIR}/examples)
-install(FILES tools/pycan_ecu.py tools/ehpt_dbc.py python/examples/mbecu2_ecu.py examples/lcm_ecu.cpp
+install(FILES tools/pycan_ecu.py tools/ehpt_dbc.py python/examples/mbecu2_ecu.py python/examples/shev_ems.py
+              examples/lcm_ecu.cpp
         DESTINATION ${EHPT_EXAMPLES_INSTALL_DIR} COMPONENT runtime)
 install(FILES packaging/examples-README.md DESTINATION ${EHPT_EXAMPLES_INSTALL_DIR} RENAME README.md COMPONENT runtime)
 install(FILES examples/embed/CMakeLists.txt examples/embed/main.cpp

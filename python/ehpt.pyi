@@ -104,6 +104,35 @@ class EvCommand:
     driveTauRef_Nm: float
     def __init__(self, *, stamp: Stamp = Stamp(), driveTauRef_Nm: float = 0.0) -> None: ...
 
+class ShevSensors:
+    stamp: Stamp
+    driverRequest_Nm: float
+    speed_m_s: float
+    driveW_rad_s: float
+    driveTauLim_Nm: float
+    drivePowDc_W: float
+    gensetW_rad_s: float
+    gensetPowDc_W: float
+    batSOC: float
+    batPowDel_W: float
+    battery_voltage_V: float
+    battery_current_A: float
+    fault: int
+    locked: bool
+    def __init__(self, *, stamp: Stamp = Stamp(), driverRequest_Nm: float = 0.0, speed_m_s: float = 0.0,
+                 driveW_rad_s: float = 0.0, driveTauLim_Nm: float = 0.0, drivePowDc_W: float = 0.0,
+                 gensetW_rad_s: float = 0.0, gensetPowDc_W: float = 0.0, batSOC: float = 0.0,
+                 batPowDel_W: float = 0.0, battery_voltage_V: float = 0.0, battery_current_A: float = 0.0,
+                 fault: int = 0, locked: bool = False) -> None: ...
+
+class ShevCommand:
+    stamp: Stamp
+    driveTauRef_Nm: float
+    gensetPowRef_W: float
+    gensetON: bool
+    def __init__(self, *, stamp: Stamp = Stamp(), driveTauRef_Nm: float = 0.0, gensetPowRef_W: float = 0.0,
+                 gensetON: bool = False) -> None: ...
+
 class RunResult:
     @property
     def summary(self) -> dict[str, Any]: ...
@@ -128,8 +157,8 @@ class Simulation:
                  cycle: tuple[ArrayLike, ArrayLike] | None = None, faults: Sequence[str] | None = None) -> None: ...
     def step(self, n: int) -> int: ...
     def run(self) -> int: ...
-    def read_sensors(self) -> PsdSensors | EvSensors: ...
-    def write_command(self, command: PsdCommand | EvCommand) -> None: ...
+    def read_sensors(self) -> PsdSensors | EvSensors | ShevSensors: ...
+    def write_command(self, command: PsdCommand | EvCommand | ShevCommand) -> None: ...
     def outputs(self) -> dict[str, float]: ...
     def timeseries(self) -> dict[str, numpy.ndarray]: ...
     def to_dataframe(self) -> pandas.DataFrame: ...

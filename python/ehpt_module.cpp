@@ -5,7 +5,8 @@
 //   ehpt.run(scenario, set=None, cycle=None) -> RunResult      the CLI's `ehpt run`, into memory
 //   ehpt.Simulation(scenario, set=None, external_ecu=False, chunk_steps=50000, cycle=None)
 //       .step(n), .run(), .read_sensors(), .write_command(cmd), .timeseries(), ...
-//   ehpt.PsdSensors / PsdCommand / EvSensors / EvCommand / Stamp: the messages of msgs/
+//   ehpt.PsdSensors / PsdCommand / EvSensors / EvCommand / ShevSensors / ShevCommand / Stamp:
+//   the messages of msgs/
 //   ehpt.Error (a ValueError) and ehpt.Problem: what is wrong with a scenario, parsed
 //
 // Everything numeric is computed by the same library code as the CLI (ehpt_hil), so a run
@@ -31,6 +32,7 @@
 
 #include "ecu/ev_follower.hpp"
 #include "ecu/psd_ecu.hpp"
+#include "ecu/shev_ems.hpp"
 #include "hil/bus/bus_family.hpp"
 #include "hil/bus/in_process_bus.hpp"
 #include "hil/config/config.hpp"
@@ -40,6 +42,7 @@
 #include "hil/run/simulation.hpp"
 #include "msgs/ev.hpp"
 #include "msgs/psd.hpp"
+#include "msgs/shev.hpp"
 #include "msgs/stamp.hpp"
 
 namespace py = pybind11;
@@ -71,7 +74,7 @@ EHPT_PY_ARG(CycleArg, "tuple[ArrayLike, ArrayLike] | None")
 EHPT_PY_ARG(FaultsArg, "Sequence[str] | None")
 EHPT_PY_ARG(BoolArg, "bool")
 EHPT_PY_ARG(IntArg, "int")
-EHPT_PY_ARG(CommandArg, "PsdCommand | EvCommand")
+EHPT_PY_ARG(CommandArg, "PsdCommand | EvCommand | ShevCommand")
 EHPT_PY_ARG(AnyValue, "object")
 // return types that pybind11 would show as "dict", "list" or "object"
 EHPT_PY_ARG(FloatDict, "dict[str, float]")
@@ -81,7 +84,7 @@ EHPT_PY_ARG(SummaryDict, "dict[str, Any]")
 EHPT_PY_ARG(VerdictDict, "dict[str, Any] | None")
 EHPT_PY_ARG(ParamsDict, "dict[str, Any] | None")
 EHPT_PY_ARG(StrList, "list[str]")
-EHPT_PY_ARG(SensorsValue, "PsdSensors | EvSensors")
+EHPT_PY_ARG(SensorsValue, "PsdSensors | EvSensors | ShevSensors")
 EHPT_PY_ARG(DataFrameValue, "pandas.DataFrame")
 EHPT_PY_ARG(OptionalInt, "int | None")
 #undef EHPT_PY_ARG
@@ -728,6 +731,13 @@ msgs::EvCommand safe_ev_command() {
   return c;
 }
 
+msgs::ShevCommand safe_shev_command() {
+  msgs::ShevCommand c{};
+  hil::BusFamily<msgs::ShevSensors>::make_safe(c);
+  c.gensetON = false;
+  return c;
+}
+
 void bind_messages(py::module_& m) {
   using namespace msgs;
   const char* per_sender = "per sender, +1 per message (wraps at 2**32)";
@@ -789,6 +799,31 @@ void bind_messages(py::module_& m) {
       .field("stamp", &EvCommand::stamp, "an ehpt.Stamp", "The stamp of the sensor sample the command was computed from.")
       .field("driveTauRef_Nm", &EvCommand::driveTauRef_Nm, "a float", "Torque asked of the drive, N m (the limiter may cut it). Default 0.")
       .finish();
+  MessageClass<ShevSensors>(m, "ShevSensors", "Series hybrid, plant -> ECU, sampled at the start of an ECU period (msgs/shev.hpp).")
+      .field("stamp", &ShevSensors::stamp, "an ehpt.Stamp", "The sample's time, step and sequence number.")
+      .field("driverRequest_Nm", &ShevSensors::driverRequest_Nm, "a float", "Driver's torque request at the drive shaft, N m.")
+      .field("speed_m_s", &ShevSensors::speed_m_s, "a float", "Vehicle speed, m/s.")
+      .field("driveW_rad_s", &ShevSensors::driveW_rad_s, "a float", "Drive shaft speed, rad/s.")
+      .field("driveTauLim_Nm", &ShevSensors::driveTauLim_Nm, "a float", "Most torque the drive can deliver at its speed, N m.")
+      .field("drivePowDc_W", &ShevSensors::drivePowDc_W, "a float", "DC power the drive draws from the bus (the EMS's input), W.")
+      .field("gensetW_rad_s", &ShevSensors::gensetW_rad_s, "a float", "Genset (engine) shaft speed, rad/s.")
+      .field("gensetPowDc_W", &ShevSensors::gensetPowDc_W, "a float", "DC power the genset delivers to the bus (> 0 generating), W.")
+      .field("batSOC", &ShevSensors::batSOC, "a float", "Battery state of charge, fraction (0..1).")
+      .field("batPowDel_W", &ShevSensors::batPowDel_W, "a float", "Battery terminal power, W.")
+      .field("battery_voltage_V", &ShevSensors::battery_voltage_V, "a float", "Battery terminal voltage, V.")
+      .field("battery_current_A", &ShevSensors::battery_current_A, "a float", "Battery terminal current, A (> 0 discharging).")
+      .field("fault", &ShevSensors::fault, "an int in [0, 2**32)", "Fault bits (plant::Fault); 0: none.")
+      .field("locked", &ShevSensors::locked, "a bool", "True while the vehicle is held at standstill.")
+      .finish();
+  MessageClass<ShevCommand>(m, "ShevCommand",
+                            "Series hybrid, ECU -> plant, held until the next command (msgs/shev.hpp).\n\n"
+                            "ShevCommand() is the safe state: no torque, no genset power, gensetON=False.",
+                            safe_shev_command())
+      .field("stamp", &ShevCommand::stamp, "an ehpt.Stamp", "The stamp of the sensor sample the command was computed from.")
+      .field("driveTauRef_Nm", &ShevCommand::driveTauRef_Nm, "a float", "Torque asked of the drive, N m (the limiter may cut it). Default 0.")
+      .field("gensetPowRef_W", &ShevCommand::gensetPowRef_W, "a float", "DC power asked of the genset, W (its GMS takes < 0 as 0). Default 0.")
+      .field("gensetON", &ShevCommand::gensetON, "a bool", "Genset on (ON/OFF gensets only; a plain genset always runs). Default False.")
+      .finish();
 }
 
 // The built-in ECU's parameters as a dict, so that an ECU written in Python can start from
@@ -813,6 +848,15 @@ py::object ecu_parameters(const hil::Scenario& sc) {
     d["on_threshold_W"] = e->on_threshold_W;
     d["off_threshold_W"] = e->off_threshold_W;
     d["ice_off_speed_ref_rad_s"] = e->ice_off_speed_ref_rad_s;
+  } else if (const auto* sh = sc.ecu.get_if<ecu::ShevEmsParams>()) {
+    d["kind"] = ecu::ecu_name(sh->kind);
+    d["power_filter_s"] = sh->power_filter_s;
+    d["power_filter_initial_W"] = sh->power_filter_initial_W;
+    d["power_max_W"] = sh->power_max_W;
+    d["soc_ref"] = sh->soc_ref;
+    d["soc_gain_W"] = sh->soc_gain_W;
+    d["on_W"] = sh->on_W;
+    d["off_W"] = sh->off_W;
   } else if (sc.ecu.holds<ecu::EvFollowerParams>()) {
     d["kind"] = "follower";
   } else {
@@ -823,7 +867,7 @@ py::object ecu_parameters(const hil::Scenario& sc) {
 
 // ---- Simulation ----------------------------------------------------------------------------
 
-enum class Family { kNone, kPsd, kEv };
+enum class Family { kNone, kPsd, kEv, kShev };
 
 class PySimulation {
  public:
@@ -853,12 +897,11 @@ class PySimulation {
     if (!loaded) throw_load_errors(scenario, errors, overrides, name_error);
     family_ = sc_.ecu.holds<ecu::PsdEcuParams>()     ? Family::kPsd
               : sc_.ecu.holds<ecu::EvFollowerParams>() ? Family::kEv
+              : sc_.ecu.holds<ecu::ShevEmsParams>()    ? Family::kShev
                                                        : Family::kNone;
     if (external_ && family_ == Family::kNone) {
       raise_argument_error(scenario, "external_ecu", "True",
-                           sc_.ecu.empty() ? "this vehicle has no ECU (a test rig), so there is none to replace"
-                                           : "this vehicle's ECU messages are not in ehpt's bus contract yet (the "
-                                             "series hybrid), so Python cannot take its place");
+                           "this vehicle has no ECU (a test rig), so there is none to replace");
     }
     if (external_ && sc_.solver.ecu_latency_steps != 0) {
       // the runner applies an external command from its sample on (as a lockstep bus plant)
@@ -920,10 +963,14 @@ class PySimulation {
         sim().read_sensors(s);
         return SensorsValue(py::cast(s));
       }
+      case Family::kShev: {
+        msgs::ShevSensors s;
+        sim().read_sensors(s);
+        return SensorsValue(py::cast(s));
+      }
       case Family::kNone: break;
     }
-    throw py::type_error(sc_.name + (sc_.ecu.empty() ? ": this vehicle has no ECU messages (a test rig)"
-                                                     : ": this vehicle's ECU messages are not in ehpt's bus contract yet"));
+    throw py::type_error(sc_.name + ": this vehicle has no ECU messages (a test rig)");
   }
 
   void write_command(const CommandArg& cmd) {
@@ -939,8 +986,15 @@ class PySimulation {
       const auto& c = cmd.cast<const msgs::EvCommand&>();
       refuse_non_finite(msgs::all_finite(c));
       sim().write_command(c);
+    } else if (family_ == Family::kShev && py::isinstance<msgs::ShevCommand>(cmd)) {
+      const auto& c = cmd.cast<const msgs::ShevCommand&>();
+      refuse_non_finite(msgs::all_finite(c));
+      sim().write_command(c);
     } else {
-      const char* wanted = family_ == Family::kPsd ? "an ehpt.PsdCommand" : family_ == Family::kEv ? "an ehpt.EvCommand" : "none (a rig has no ECU)";
+      const char* wanted = family_ == Family::kPsd    ? "an ehpt.PsdCommand"
+                           : family_ == Family::kEv   ? "an ehpt.EvCommand"
+                           : family_ == Family::kShev ? "an ehpt.ShevCommand"
+                                                      : "none (a rig has no ECU)";
       wrong_type(sc_.name + ": write_command(command): command", wanted, cmd);
     }
   }
@@ -1182,7 +1236,7 @@ PYBIND11_MODULE(ehpt, m) {
            "an ECU sample. Returns the steps taken (0 once finished). Releases the GIL.")
       .def("run", &PySimulation::run, "Steps to the end; returns the steps taken. Releases the GIL.")
       .def("read_sensors", &PySimulation::read_sensors,
-           "The sensor message now (PsdSensors or EvSensors), stamped; TypeError for a rig (no ECU).")
+           "The sensor message now (PsdSensors, EvSensors or ShevSensors), stamped; TypeError for a rig (no ECU).")
       .def("write_command", &PySimulation::write_command, py::arg("command"),
            "PsdCommand or EvCommand, this vehicle's (TypeError if not); acts from the current step on.")
       .def("outputs", &PySimulation::outputs,

@@ -123,11 +123,8 @@ int cmd_signals(const std::vector<std::string>& args_in) {
     fields("sensor message (the plant to its ECU; a sensor fault's target)", ehpt::msgs::kEvSensorFieldTable);
     fields("command message (the ECU to the plant; a command fault's target)", ehpt::msgs::kEvCommandFieldTable);
   } else if (sc.ecu.holds<ehpt::ecu::ShevEmsParams>()) {
-    // the series hybrid: its messages in one process; no bus contract yet, so no frames to fault
     fields("sensor message (the plant to its ECU; a sensor fault's target)", ehpt::msgs::kShevSensorFieldTable);
     fields("command message (the ECU to the plant; a command fault's target)", ehpt::msgs::kShevCommandFieldTable);
-    text += "bus: none (the series hybrid's messages are not in the bus contract yet)\n";
-    return out(text) ? 0 : 1;
   } else {
     std::cerr << args[0] << ": this vehicle has no ECU messages (a rig): nothing to fault\n";
     return 2;

@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "ecu/psd_ecu.hpp"
+#include "ecu/shev_ems.hpp"
 #include "hil/bus/bus_ecu.hpp"
 #include "hil/bus/bus_plant.hpp"
 #include "hil/run/batch.hpp"
@@ -72,10 +73,11 @@ const char* kEcuHelp =
     "usage: ehpt ecu SCENARIO --bus SPEC [--set key=value ...] [--idle-timeout-s S]\n"
     "                [--max-samples N] [--quiet]\n"
     "\n"
-    "Runs the scenario's built-in ECU (MBecu1, MBecu1soc, MBecu2, the EV's follower) as its\n"
-    "own process: for each PlantStatus frame it computes one command from that sample's sensor\n"
-    "frames and sends it. Stops when the plant closes the connection (socketcand), after S\n"
-    "seconds without a frame from the plant (default 10), or after N samples.\n"
+    "Runs the scenario's built-in ECU (MBecu1, MBecu1soc, MBecu2, the EV's follower, the\n"
+    "series hybrid's EMS) as its own process: for each PlantStatus frame it computes one\n"
+    "command from that sample's sensor frames and sends it. Stops when the plant closes the\n"
+    "connection (socketcand), after S seconds without a frame from the plant (default 10), or\n"
+    "after N samples.\n"
     "  --bus SPEC       socketcan:IFACE, socketcand:HOST:PORT (connects to 'ehpt plant'), or\n"
     "                   lcm:URL (lcm:udpm://239.255.76.67:7667?ttl=0)\n"
     "  --lcm-prefix P   LCM channel prefix (default EHPT_)\n";
@@ -227,8 +229,9 @@ int parse_bus_args(const std::vector<std::string>& args, bool plant, const char*
 // The ids the ECU's side of the contract accepts, by vehicle family (the plant's: its binding's).
 std::span<const std::uint32_t> ecu_rx_ids(const ehpt::hil::Scenario& sc) {
   namespace can = ehpt::io::can;
-  const bool psd = sc.ecu.holds<ehpt::ecu::PsdEcuParams>();
-  return psd ? std::span<const std::uint32_t>(can::kPsdSensorIds) : std::span<const std::uint32_t>(can::kEvSensorIds);
+  if (sc.ecu.holds<ehpt::ecu::PsdEcuParams>()) return can::kPsdSensorIds;
+  if (sc.ecu.holds<ehpt::ecu::ShevEmsParams>()) return can::kShevSensorIds;
+  return can::kEvSensorIds;
 }
 
 }  // namespace

@@ -8,7 +8,6 @@
 #include <iostream>
 #include <memory>
 
-#include "ecu/psd_ecu.hpp"
 #include "hil/bus/bus_plant.hpp"
 #include "hil/bus/replay.hpp"
 #include "hil/run/batch.hpp"
@@ -138,10 +137,9 @@ int cmd_replay(const std::vector<std::string>& args) {
     std::cerr << log_path << ": " << why << "\n";
     return 2;
   }
-  const bool psd = sc.ecu.holds<ehpt::ecu::PsdEcuParams>();
-  if ((psd ? "psd" : "ev") != log.family) {
+  if (const std::string family = ehpt::hil::bus_family(sc); family != log.family) {
     std::cerr << log_path << ": its commands are of family '" << log.family << "' but " << log.scenario_path
-              << " is a" << (psd ? " hybrid ('psd')" : "n EV ('ev')") << "\n";
+              << " is a vehicle of family '" << family << "'\n";
     return 2;
   }
   const std::unique_ptr<ehpt::hil::ExternalDriver> driver = ehpt::hil::make_replay_driver(log, log_path);

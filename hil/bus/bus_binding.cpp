@@ -67,6 +67,10 @@ std::optional<Family> family_of(const std::string& family) {
     return Family{find_field<msgs::EvSensors>, find_field<msgs::EvCommand>, field_names<msgs::EvSensors>,
                   field_names<msgs::EvCommand>};
   }
+  if (family == "shev") {
+    return Family{find_field<msgs::ShevSensors>, find_field<msgs::ShevCommand>, field_names<msgs::ShevSensors>,
+                  field_names<msgs::ShevCommand>};
+  }
   return std::nullopt;
 }
 
@@ -513,7 +517,7 @@ std::optional<Binding> from_table(const toml::table& root, const std::string& bi
   const std::size_t errors_before = errors.size();
   const std::optional<Family> fam = family_of(family);
   if (!fam) {
-    errors.push_back(binding_file + ": family `" + family + "` has no bus messages (psd or ev)");
+    errors.push_back(binding_file + ": family `" + family + "` has no bus messages (psd, ev or shev)");
     return std::nullopt;
   }
   Binding b;

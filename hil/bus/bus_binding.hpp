@@ -60,7 +60,7 @@ struct Binding {
   Binding& operator=(const Binding&) = delete;
 
   std::string file;       // the binding file as given ("<built-in ehpt-psd>" for the default)
-  std::string family;     // "psd" or "ev": the scenario's (the field names are its messages')
+  std::string family;     // "psd", "ev" or "shev": the scenario's (the field names are its messages')
   io::can::Dbc dbc;
   std::string plant_node;  // the DBC node the plant plays
   std::vector<BoundMessage> send, receive;  // in the binding's order: the order frames go out
@@ -74,7 +74,7 @@ struct Binding {
 };
 
 // Start-up: reads the binding file and the DBC it names (relative to the binding's folder) for
-// a plant of family "psd" or "ev" whose ECU runs every ecu_period_s. nullopt and every problem
+// a plant of family "psd", "ev" or "shev" whose ECU runs every ecu_period_s. nullopt and every problem
 // in errors if it cannot be used.
 std::optional<Binding> load_binding(const std::string& path, const std::string& family, double ecu_period_s,
                                     std::vector<std::string>& errors);

@@ -7,6 +7,7 @@
 
 #include "ecu/ev_follower.hpp"
 #include "ecu/psd_ecu.hpp"
+#include "ecu/shev_ems.hpp"
 #include "hil/bus/bus_family.hpp"
 #include "hil/run/pacer.hpp"
 #include "io/can/codec.hpp"
@@ -257,6 +258,11 @@ BusEcuResult serve_scenario(const Scenario& sc, MakeWire&& make_wire, const BusE
     auto wire = make_wire(msgs::PsdSensors{});
     return go(controller, wire);
   }
+  if (const auto* e = sc.ecu.get_if<ecu::ShevEmsParams>()) {
+    ecu::ShevEms controller(*e, e->period_s);
+    auto wire = make_wire(msgs::ShevSensors{});
+    return go(controller, wire);
+  }
   ecu::EvFollower follower;
   auto wire = make_wire(msgs::EvSensors{});
   return go(follower, wire);
@@ -290,6 +296,10 @@ std::unique_ptr<CanEcuNode> make_can_ecu_node(const Scenario& sc, io::can::Trans
     return std::make_unique<CanEcuNodeOf<msgs::PsdSensors, ecu::PsdEcu>>(ecu::PsdEcu(*e, e->period_s), bus,
                                                                         sc.solver.step_s);
   }
+  if (const auto* e = sc.ecu.get_if<ecu::ShevEmsParams>()) {
+    return std::make_unique<CanEcuNodeOf<msgs::ShevSensors, ecu::ShevEms>>(ecu::ShevEms(*e, e->period_s), bus,
+                                                                          sc.solver.step_s);
+  }
   if (sc.ecu.holds<ecu::EvFollowerParams>()) {
     return std::make_unique<CanEcuNodeOf<msgs::EvSensors, ecu::EvFollower>>(ecu::EvFollower{}, bus, sc.solver.step_s);
   }
@@ -297,7 +307,8 @@ std::unique_ptr<CanEcuNode> make_can_ecu_node(const Scenario& sc, io::can::Trans
 }
 
 bool has_bus_ecu(const Scenario& sc, std::string& why) {
-  if (sc.ecu.holds<ecu::PsdEcuParams>() || sc.ecu.holds<ecu::EvFollowerParams>()) {
+  if (sc.ecu.holds<ecu::PsdEcuParams>() || sc.ecu.holds<ecu::EvFollowerParams>() ||
+      sc.ecu.holds<ecu::ShevEmsParams>()) {
     return true;
   }
   why = sc.name + ": its vehicle (" + sc.vehicle_path + ")" +

@@ -6,6 +6,7 @@
 #include "io/can/contract.hpp"
 #include "msgs/ev.hpp"
 #include "msgs/psd.hpp"
+#include "msgs/shev.hpp"
 
 namespace ehpt::hil {
 
@@ -34,6 +35,20 @@ struct BusFamily<msgs::EvSensors> {
   static constexpr const auto& kCanSensorIds = io::can::kEvSensorIds;
   static constexpr const auto& kCanCommandIds = io::can::kEvCommandIds;
   static void make_safe(Command& c) { c.driveTauRef_Nm = 0.0; }
+};
+
+template <>
+struct BusFamily<msgs::ShevSensors> {
+  using Command = msgs::ShevCommand;
+  static constexpr const char* kFamily = "shev";
+  static constexpr const auto& kCanSensorIds = io::can::kShevSensorIds;
+  static constexpr const auto& kCanCommandIds = io::can::kShevCommandIds;
+  // the drive's and the genset's references to zero (the genset's GMS idles it at zero power);
+  // gensetON stays as it was: a stale message cannot start or stop the engine
+  static void make_safe(Command& c) {
+    c.driveTauRef_Nm = 0.0;
+    c.gensetPowRef_W = 0.0;
+  }
 };
 
 }  // namespace ehpt::hil

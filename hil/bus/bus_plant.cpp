@@ -9,6 +9,7 @@
 
 #include "ecu/ev_follower.hpp"
 #include "ecu/psd_ecu.hpp"
+#include "ecu/shev_ems.hpp"
 #include "hil/bus/bus_family.hpp"
 #include "hil/bus/bus_wire_can.hpp"
 #ifndef EHPT_BUS_NO_LCM  // an FMU's library (CMakeLists.txt: ehpt_fmu_core) speaks CAN only, without liblcm
@@ -487,10 +488,11 @@ class BusPlant final : public ExternalDriver,
 
 bool can_run_on_bus(const Scenario& sc, std::string& why) {
   // the ECU's messages decide the bus family: every EV kind uses the follower's, the hybrid its own
-  if (!sc.ecu.holds<ecu::PsdEcuParams>() && !sc.ecu.holds<ecu::EvFollowerParams>()) {
+  if (!sc.ecu.holds<ecu::PsdEcuParams>() && !sc.ecu.holds<ecu::EvFollowerParams>() &&
+      !sc.ecu.holds<ecu::ShevEmsParams>()) {
     why = sc.name + ": its vehicle (" + sc.vehicle_path +
-          ") has no bus messages (the EV and the power-split hybrid talk to an ECU; the series hybrid's "
-          "messages are not in the bus contract yet, and the rigs have no ECU)";
+          ") has no bus messages (the EV, the power-split and the series hybrid talk to an ECU; the rigs have "
+          "no ECU)";
     return false;
   }
   if (sc.solver.ecu_latency_steps != 0) {
@@ -501,7 +503,11 @@ bool can_run_on_bus(const Scenario& sc, std::string& why) {
   return true;
 }
 
-const char* bus_family(const Scenario& sc) { return sc.ecu.holds<ecu::PsdEcuParams>() ? "psd" : "ev"; }
+const char* bus_family(const Scenario& sc) {
+  if (sc.ecu.holds<ecu::PsdEcuParams>()) return BusFamily<msgs::PsdSensors>::kFamily;
+  if (sc.ecu.holds<ecu::ShevEmsParams>()) return BusFamily<msgs::ShevSensors>::kFamily;
+  return BusFamily<msgs::EvSensors>::kFamily;
+}
 
 std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::can::Transport& bus, const BusPlantOptions& opt,
                                                Binding binding, std::string& error) {
@@ -530,16 +536,15 @@ std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::can::Tran
     plant->wire().set_faults(std::move(faults));
     return plant;
   };
-  if (sc.ecu.holds<ecu::PsdEcuParams>()) {
-    using S = msgs::PsdSensors;
+  const auto make = [&](auto tag) {
+    using S = decltype(tag);
     return with_faults(std::make_unique<BusPlant<S, CanWire<S>>>(sc, opt, bus, std::move(binding), sc.solver.step_s,
                                                                  opt.lockstep, command_timeout_s, opt.log_interface,
                                                                  opt.asc_log));
-  }
-  using S = msgs::EvSensors;
-  return with_faults(std::make_unique<BusPlant<S, CanWire<S>>>(sc, opt, bus, std::move(binding), sc.solver.step_s,
-                                                               opt.lockstep, command_timeout_s, opt.log_interface,
-                                                               opt.asc_log));
+  };
+  if (sc.ecu.holds<ecu::PsdEcuParams>()) return make(msgs::PsdSensors{});
+  if (sc.ecu.holds<ecu::ShevEmsParams>()) return make(msgs::ShevSensors{});
+  return make(msgs::EvSensors{});
 }
 
 #ifndef EHPT_BUS_NO_LCM
@@ -548,6 +553,10 @@ std::unique_ptr<ExternalDriver> make_bus_plant(const Scenario& sc, io::lcm::LcmB
   if (!can_run_on_bus(sc, error)) return nullptr;
   if (sc.ecu.holds<ecu::PsdEcuParams>()) {
     using S = msgs::PsdSensors;
+    return std::make_unique<BusPlant<S, LcmWire<S>>>(sc, opt, bus, opt.lcm_prefix);
+  }
+  if (sc.ecu.holds<ecu::ShevEmsParams>()) {
+    using S = msgs::ShevSensors;
     return std::make_unique<BusPlant<S, LcmWire<S>>>(sc, opt, bus, opt.lcm_prefix);
   }
   using S = msgs::EvSensors;

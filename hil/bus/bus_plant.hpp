@@ -58,7 +58,7 @@ struct BusPlantOptions {
 // False and a one-line reason if the scenario cannot run on the bus (a rig without bus
 // messages, an ECU latency the bus cannot honour).
 bool can_run_on_bus(const Scenario& sc, std::string& why);
-// "psd" or "ev": whose messages the scenario's plant speaks (a binding's family).
+// "psd", "ev" or "shev": whose messages the scenario's plant speaks (a binding's family).
 const char* bus_family(const Scenario& sc);
 // The driver of `ehpt plant` over CAN, its frames those of the binding (default_binding for
 // ehpt's own contract); nullptr and why if !can_run_on_bus or the binding is another family's.

@@ -122,6 +122,9 @@ std::unique_ptr<ExternalDriver> make_replay_driver(const InputsLog& log, const s
   if (log.family == "psd") {
     return std::make_unique<ReplayDriver<msgs::PsdSensors, msgs::PsdCommand>>(log, log_path);
   }
+  if (log.family == "shev") {
+    return std::make_unique<ReplayDriver<msgs::ShevSensors, msgs::ShevCommand>>(log, log_path);
+  }
   return std::make_unique<ReplayDriver<msgs::EvSensors, msgs::EvCommand>>(log, log_path);
 }
 

@@ -28,6 +28,12 @@ int format_command(char* buf, std::size_t size, std::int64_t step, const msgs::P
                        c.iceTauRef_Nm, c.genTauRef_Nm, c.motTauRef_Nm, c.iceON ? 1 : 0);
 }
 
+int format_command(char* buf, std::size_t size, std::int64_t step, const msgs::ShevCommand& c) {
+  return std::snprintf(buf, size, "shev %lld %u %lld %.17g %.17g %.17g %d", static_cast<long long>(step),
+                       c.stamp.sequence, static_cast<long long>(c.stamp.step), c.stamp.time_s, c.driveTauRef_Nm,
+                       c.gensetPowRef_W, c.gensetON ? 1 : 0);
+}
+
 std::string inputs_log_header(const std::string& scenario_path, const std::vector<std::string>& overrides,
                               const std::vector<std::string>& faults, const char* family, const char* pacing) {
   std::string h = "# ehpt inputs log 1\n# scenario " + scenario_path + "\n";
@@ -38,6 +44,19 @@ std::string inputs_log_header(const std::string& scenario_path, const std::vecto
 }
 
 namespace {
+
+// How many values (time_s first) a command line of a family has, and which of them is an
+// on/off flag (0 or 1); 0 values: not a family with bus messages.
+struct FamilyLine {
+  std::size_t values = 0;
+  std::size_t flag = 0;  // 0: none (values[0] is the time)
+};
+FamilyLine family_line(std::string_view family) {
+  if (family == "ev") return {2, 0};
+  if (family == "psd") return {6, 5};
+  if (family == "shev") return {4, 3};
+  return {};
+}
 
 // The next whitespace-separated token of `rest` (advanced past it); empty at the end.
 std::string_view next_token(std::string_view& rest) {
@@ -248,12 +267,13 @@ bool read_inputs_log(const std::string& path, InputsLog& out, std::vector<std::s
       bad(why);
       continue;
     }
-    if (l.family != out.family || (l.family != "ev" && l.family != "psd")) {
+    const FamilyLine fl = family_line(l.family);
+    if (l.family != out.family || fl.values == 0) {
       bad("a command of family '" + std::string(l.family.substr(0, 40)) + "' (the log's family is '" + out.family +
           "')");
       continue;
     }
-    const std::size_t want = l.family == "ev" ? 2 : 6;
+    const std::size_t want = fl.values;
     if (l.n_values != want) {
       bad("expected " + std::to_string(want + 4) + " fields");
       continue;
@@ -262,7 +282,9 @@ bool read_inputs_log(const std::string& path, InputsLog& out, std::vector<std::s
       bad("step " + std::to_string(l.step) + " before the previous command's " + std::to_string(last_step));
       continue;
     }
-    if (want == 6 && l.values[5] != 0.0 && l.values[5] != 1.0) bad("iceON must be 0 or 1");
+    if (fl.flag != 0 && l.values[fl.flag] != 0.0 && l.values[fl.flag] != 1.0) {
+      bad(std::string(l.family == "psd" ? "iceON" : "gensetON") + " must be 0 or 1");
+    }
     last_step = l.step;
     ++out.commands;
   }
@@ -295,7 +317,7 @@ bool InputsLogReader::next_line(InputsLogLine& l) {
     if (lines_->too_long) return changed("a line too long");
     if (line.empty() || line[0] == '#') continue;
     if (!parse_inputs_line(line, l, why)) return changed(why);
-    if (l.family != family_ || l.n_values != (family_ == "ev" ? 2u : 6u) || l.step < last_step_) {
+    if (l.family != family_ || l.n_values != family_line(family_).values || l.step < last_step_) {
       return changed("a command that does not follow the header and the one before it");
     }
     last_step_ = l.step;
@@ -340,6 +362,18 @@ bool InputsLogReader::next(std::int64_t& step, msgs::PsdCommand& c) {
   c.genTauRef_Nm = l.values[3];
   c.motTauRef_Nm = l.values[4];
   c.iceON = l.values[5] != 0.0;
+  return true;
+}
+
+bool InputsLogReader::next(std::int64_t& step, msgs::ShevCommand& c) {
+  InputsLogLine l;
+  if (family_ != "shev" || !next_line(l)) return false;
+  step = l.step;
+  c = msgs::ShevCommand{};
+  c.stamp = msgs::Stamp{l.values[0], l.stamp_step, l.sequence};
+  c.driveTauRef_Nm = l.values[1];
+  c.gensetPowRef_W = l.values[2];
+  c.gensetON = l.values[3] != 0.0;
   return true;
 }
 

@@ -13,10 +13,11 @@
 //   # scenario /abs/path/scenario.toml
 //   # set key=value                        (each --set, in order)
 //   # fault kind=... target=... at_s=...   (each --fault, in order)
-//   # family ev | psd
+//   # family ev | psd | shev
 //   # pacing wall_clock | realtime | lockstep
 //   ev  STEP SEQ STAMP_STEP STAMP_TIME_S driveTauRef_Nm
 //   psd STEP SEQ STAMP_STEP STAMP_TIME_S icePowRef_W iceTauRef_Nm genTauRef_Nm motTauRef_Nm iceON
+//   shev STEP SEQ STAMP_STEP STAMP_TIME_S driveTauRef_Nm gensetPowRef_W gensetON
 // The run phase appends to a buffer reserved at start-up and writes it when 1 MB is buffered
 // (about every 8 000 commands) and between chunks, as bus.log does. A replay reads it back as
 // a stream: its memory does not grow with the log.
@@ -31,6 +32,7 @@
 #include "hil/config/config.hpp"
 #include "msgs/ev.hpp"
 #include "msgs/psd.hpp"
+#include "msgs/shev.hpp"
 
 namespace ehpt::hil {
 
@@ -39,6 +41,7 @@ inline constexpr const char* kInputsLogName = "inputs.log";
 // A command as one line (without the newline) into buf; returns its length. No allocation.
 int format_command(char* buf, std::size_t size, std::int64_t step, const msgs::EvCommand& c);
 int format_command(char* buf, std::size_t size, std::int64_t step, const msgs::PsdCommand& c);
+int format_command(char* buf, std::size_t size, std::int64_t step, const msgs::ShevCommand& c);
 
 // An inputs.log's header and what a validating read found; the commands stay in the file
 // (a log of a day's session is hundreds of MB: a replay streams it, InputsLogReader).
@@ -47,7 +50,7 @@ struct InputsLog {
   std::string scenario_path;
   std::vector<std::string> overrides;
   std::vector<std::string> faults;  // --fault one-offs (the scenario file's [[fault]] tables are in it)
-  std::string family;  // "ev" or "psd"
+  std::string family;  // "ev", "psd" or "shev"
   std::string pacing;
   std::int64_t commands = 0;
 };
@@ -85,6 +88,7 @@ class InputsLogReader {
 
   bool next(std::int64_t& step, msgs::EvCommand& c);
   bool next(std::int64_t& step, msgs::PsdCommand& c);
+  bool next(std::int64_t& step, msgs::ShevCommand& c);
   const std::string& error() const { return error_; }
   std::int64_t commands_read() const { return commands_; }
 

@@ -74,10 +74,6 @@ KindRead read_shev_kind(Reader& vr, const KindInput& in, Scenario& out, Problems
   plant::ShevParams p = read_shev(vr, in.cycle, in.cycle_periodic, ctx);
   ecu::ShevEmsParams e = read_shev_ems(vr.sub("ecu"), out.ecu_timing, ctx);
   vr.finish();
-  if (out.ecu_timing.codec == "can") {
-    ctx.error(ctx.where["ecu.codec"], "ecu.codec", "\"can\"",
-              "the series hybrid has no CAN message set in the contract yet (io/can/ehpt.dbc): use \"none\"");
-  }
   ecu::validate(e, "ecu", problems);
   plant::validate(p, problems);
   if (problems.empty()) {

@@ -27,12 +27,20 @@ struct CanFramesOf<msgs::EvSensors> {
   static constexpr std::size_t kCount = io::can::kEvSensorIds.size();
 };
 template <>
+struct CanFramesOf<msgs::ShevSensors> {
+  static constexpr std::size_t kCount = io::can::kShevSensorIds.size();
+};
+template <>
 struct CanFramesOf<msgs::PsdCommand> {
   static constexpr std::size_t kCount = io::can::kPsdCommandIds.size();
 };
 template <>
 struct CanFramesOf<msgs::EvCommand> {
   static constexpr std::size_t kCount = io::can::kEvCommandIds.size();
+};
+template <>
+struct CanFramesOf<msgs::ShevCommand> {
+  static constexpr std::size_t kCount = io::can::kShevCommandIds.size();
 };
 
 // What an ECU process decodes from the plant's frames: the sensor message with its fault and

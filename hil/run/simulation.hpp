@@ -18,6 +18,7 @@
 #include "hil/run/runner.hpp"
 #include "msgs/ev.hpp"
 #include "msgs/psd.hpp"
+#include "msgs/shev.hpp"
 #include "plant/signals.hpp"
 
 namespace ehpt::hil {
@@ -81,13 +82,16 @@ class Simulation {
   // sampled now and stamped; a command acts from the current step on.
   virtual bool read_sensors(msgs::EvSensors&) { return false; }
   virtual bool read_sensors(msgs::PsdSensors&) { return false; }
+  virtual bool read_sensors(msgs::ShevSensors&) { return false; }
   virtual bool write_command(const msgs::EvCommand&) { return false; }
   virtual bool write_command(const msgs::PsdCommand&) { return false; }
+  virtual bool write_command(const msgs::ShevCommand&) { return false; }
   // Start-up (external_ecu): an ECU port and its pacer plug into the runner's step loop
   // (hil/run/port.hpp): from then on run() and step() exchange with the port at every step
   // instead of stopping at each sample. false: the vehicle is not of that family.
   virtual bool attach(EcuPort<msgs::EvSensors, msgs::EvCommand>*, StepPacer*) { return false; }
   virtual bool attach(EcuPort<msgs::PsdSensors, msgs::PsdCommand>*, StepPacer*) { return false; }
+  virtual bool attach(EcuPort<msgs::ShevSensors, msgs::ShevCommand>*, StepPacer*) { return false; }
   // With a port whose command comes between steps (an LS-BUS FMU, hil/run/runner.hpp): once,
   // after attach, the exchange at a run's last grid point waits for exchange_now() or the next
   // run(); exchange_now() does it (false without a port).

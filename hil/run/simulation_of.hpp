@@ -59,12 +59,17 @@ class SimulationOf final : public Simulation {
   }
   bool read_sensors(msgs::EvSensors& s) override { return sense_as(s); }
   bool read_sensors(msgs::PsdSensors& s) override { return sense_as(s); }
+  bool read_sensors(msgs::ShevSensors& s) override { return sense_as(s); }
   bool write_command(const msgs::EvCommand& c) override { return command_as(c); }
   bool write_command(const msgs::PsdCommand& c) override { return command_as(c); }
+  bool write_command(const msgs::ShevCommand& c) override { return command_as(c); }
   bool attach(EcuPort<msgs::EvSensors, msgs::EvCommand>* port, StepPacer* pacer) override {
     return attach_as(port, pacer);
   }
   bool attach(EcuPort<msgs::PsdSensors, msgs::PsdCommand>* port, StepPacer* pacer) override {
+    return attach_as(port, pacer);
+  }
+  bool attach(EcuPort<msgs::ShevSensors, msgs::ShevCommand>* port, StepPacer* pacer) override {
     return attach_as(port, pacer);
   }
 

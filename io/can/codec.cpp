@@ -37,6 +37,8 @@ using msgs::EvCommand;
 using msgs::EvSensors;
 using msgs::PsdCommand;
 using msgs::PsdSensors;
+using msgs::ShevCommand;
+using msgs::ShevSensors;
 
 constexpr Field<PsdSensors> kPsdSensorFields[] = {
     field(kPsdSensors1, "driverRequest", &PsdSensors::driverRequest),
@@ -71,6 +73,21 @@ constexpr Field<EvSensors> kEvSensorFields[] = {
 };
 static_assert(all_resolved(kEvSensorFields));
 
+constexpr Field<ShevSensors> kShevSensorFields[] = {
+    field(kShevSensors1, "driverRequest_Nm", &ShevSensors::driverRequest_Nm),
+    field(kShevSensors1, "speed_m_s", &ShevSensors::speed_m_s),
+    field(kShevSensors1, "batSOC", &ShevSensors::batSOC),
+    field(kShevSensors2, "driveW_rad_s", &ShevSensors::driveW_rad_s),
+    field(kShevSensors2, "driveTauLim_Nm", &ShevSensors::driveTauLim_Nm),
+    field(kShevSensors2, "drivePowDc_W", &ShevSensors::drivePowDc_W),
+    field(kShevSensors3, "gensetW_rad_s", &ShevSensors::gensetW_rad_s),
+    field(kShevSensors3, "gensetPowDc_W", &ShevSensors::gensetPowDc_W),
+    field(kShevSensors3, "batPowDel_W", &ShevSensors::batPowDel_W),
+    field(kShevSensors4, "battery_voltage_V", &ShevSensors::battery_voltage_V),
+    field(kShevSensors4, "battery_current_A", &ShevSensors::battery_current_A),
+};
+static_assert(all_resolved(kShevSensorFields));
+
 constexpr Field<PsdCommand> kPsdCommandFields[] = {
     field(kPsdCommand1, "icePowRef_W", &PsdCommand::icePowRef_W),
     field(kPsdCommand1, "iceTauRef_Nm", &PsdCommand::iceTauRef_Nm),
@@ -83,6 +100,14 @@ static_assert(all_resolved(kPsdCommandFlags));
 
 constexpr Field<EvCommand> kEvCommandFields[] = {field(kEvCommand, "driveTauRef_Nm", &EvCommand::driveTauRef_Nm)};
 static_assert(all_resolved(kEvCommandFields));
+
+constexpr Field<ShevCommand> kShevCommandFields[] = {
+    field(kShevCommand, "driveTauRef_Nm", &ShevCommand::driveTauRef_Nm),
+    field(kShevCommand, "gensetPowRef_W", &ShevCommand::gensetPowRef_W),
+};
+static_assert(all_resolved(kShevCommandFields));
+constexpr Field<ShevCommand, bool> kShevCommandFlags[] = {field(kShevCommand, "gensetON", &ShevCommand::gensetON)};
+static_assert(all_resolved(kShevCommandFlags));
 
 constexpr const SignalSpec* kStatusStep = find_signal(kPlantStatus, "step");
 constexpr const SignalSpec* kStatusFault = find_signal(kPlantStatus, "fault");
@@ -220,6 +245,10 @@ int encode(const msgs::PsdSensors& s, const PlantStatus& st, TxCounters& tx, std
 int encode(const msgs::EvSensors& s, const PlantStatus& st, TxCounters& tx, std::span<Frame, kEvSensorIds.size()> out) {
   return encode_sensors(s, st, tx, kEvSensorIds, out, kEvSensorFields);
 }
+int encode(const msgs::ShevSensors& s, const PlantStatus& st, TxCounters& tx,
+           std::span<Frame, kShevSensorIds.size()> out) {
+  return encode_sensors(s, st, tx, kShevSensorIds, out, kShevSensorFields);
+}
 int encode(const msgs::PsdCommand& c, TxCounters& tx, std::span<Frame, kPsdCommandIds.size()> out) {
   int saturated = 0;
   for (std::size_t i = 0; i < kPsdCommandIds.size(); ++i) {
@@ -236,6 +265,15 @@ int encode(const msgs::EvCommand& c, TxCounters& tx, std::span<Frame, kEvCommand
   put_raw(bits, kSampleStep, c.stamp.step & 0xFFFF);
   const int saturated = put_fields(bits, kEvCommand, c, kEvCommandFields);
   out[0] = finish_frame(kEvCommand, bits);
+  return saturated;
+}
+
+int encode(const msgs::ShevCommand& c, TxCounters& tx, std::span<Frame, kShevCommandIds.size()> out) {
+  std::uint64_t bits = start_frame(kShevCommand, tx);
+  put_raw(bits, kSampleStep, c.stamp.step & 0xFFFF);
+  int saturated = put_fields(bits, kShevCommand, c, kShevCommandFields);
+  saturated += put_fields(bits, kShevCommand, c, kShevCommandFlags);
+  out[0] = finish_frame(kShevCommand, bits);
   return saturated;
 }
 
@@ -283,6 +321,11 @@ void apply(const Frame& f, msgs::PsdCommand& c) {
   get_fields(f, c, kPsdCommandFlags);
 }
 void apply(const Frame& f, msgs::EvCommand& c) { get_fields(f, c, kEvCommandFields); }
+void apply(const Frame& f, msgs::ShevSensors& s) { get_fields(f, s, kShevSensorFields); }
+void apply(const Frame& f, msgs::ShevCommand& c) {
+  get_fields(f, c, kShevCommandFields);
+  get_fields(f, c, kShevCommandFlags);
+}
 void apply(const Frame& f, PlantStatus& st) {
   if (f.id != kPlantStatus) return;
   const std::uint64_t bits = payload(f);

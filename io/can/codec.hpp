@@ -19,6 +19,7 @@
 #include "io/can/frame.hpp"
 #include "msgs/ev.hpp"
 #include "msgs/psd.hpp"
+#include "msgs/shev.hpp"
 
 namespace ehpt::io::can {
 
@@ -56,8 +57,11 @@ class TxCounters {
 // A command's sampleStep is its stamp's step (the sample it answers), mod 2^16.
 int encode(const msgs::PsdSensors& s, const PlantStatus& status, TxCounters& tx, std::span<Frame, kPsdSensorIds.size()> out);
 int encode(const msgs::EvSensors& s, const PlantStatus& status, TxCounters& tx, std::span<Frame, kEvSensorIds.size()> out);
+int encode(const msgs::ShevSensors& s, const PlantStatus& status, TxCounters& tx,
+           std::span<Frame, kShevSensorIds.size()> out);
 int encode(const msgs::PsdCommand& c, TxCounters& tx, std::span<Frame, kPsdCommandIds.size()> out);
 int encode(const msgs::EvCommand& c, TxCounters& tx, std::span<Frame, kEvCommandIds.size()> out);
+int encode(const msgs::ShevCommand& c, TxCounters& tx, std::span<Frame, kShevCommandIds.size()> out);
 
 // ---- decode ----
 enum class Reject : std::uint8_t { kNone, kUnknownId, kWrongLength, kBadCounter, kOutOfRange, kStale };
@@ -91,9 +95,11 @@ struct Freshness {
 // Applies the signals of an accepted frame to a message; fields of other frames are untouched.
 void apply(const Frame& f, msgs::PsdSensors& s);  // PsdSensors1..6
 void apply(const Frame& f, msgs::EvSensors& s);   // EvSensors1..3
+void apply(const Frame& f, msgs::ShevSensors& s);  // ShevSensors1..4
 void apply(const Frame& f, PlantStatus& status);  // PlantStatus
 void apply(const Frame& f, msgs::PsdCommand& c);  // PsdCommand1..2
 void apply(const Frame& f, msgs::EvCommand& c);   // EvCommand
+void apply(const Frame& f, msgs::ShevCommand& c);  // ShevCommand
 
 struct RxStats {
   std::int64_t accepted = 0;

@@ -39,11 +39,13 @@ struct MessageSpec {
 };
 
 // Frame ids (decimal in the DBC).
-inline constexpr std::uint32_t kPsdCommand1 = 0x110, kPsdCommand2 = 0x111, kEvCommand = 0x120;
+inline constexpr std::uint32_t kPsdCommand1 = 0x110, kPsdCommand2 = 0x111, kEvCommand = 0x120, kShevCommand = 0x130;
 inline constexpr std::uint32_t kPlantStatus = 0x200;
 inline constexpr std::uint32_t kPsdSensors1 = 0x210, kPsdSensors2 = 0x211, kPsdSensors3 = 0x212,
                                kPsdSensors4 = 0x213, kPsdSensors5 = 0x214, kPsdSensors6 = 0x215;
 inline constexpr std::uint32_t kEvSensors1 = 0x220, kEvSensors2 = 0x221, kEvSensors3 = 0x222;
+inline constexpr std::uint32_t kShevSensors1 = 0x230, kShevSensors2 = 0x231, kShevSensors3 = 0x232,
+                               kShevSensors4 = 0x233;
 
 inline constexpr int kCounterStartBit = 60;
 inline constexpr int kCounterBits = 4;
@@ -73,6 +75,10 @@ inline constexpr SignalSpec kPsdCommand1Signals[] = {
 inline constexpr SignalSpec kPsdCommand2Signals[] = {torque_Nm("genTauRef_Nm", 0), torque_Nm("motTauRef_Nm", 20),
                                                      sample_step(), counter()};
 inline constexpr SignalSpec kEvCommandSignals[] = {ev_request_Nm("driveTauRef_Nm", 0), sample_step(), counter()};
+// the series hybrid's: the bus's drive asks and gives up to 1000 N m, its driver up to 2000 N m
+// (PropDriver yMax); the EMS's power reference is clamped to 200 kW
+inline constexpr SignalSpec kShevCommandSignals[] = {ev_torque_Nm("driveTauRef_Nm", 0), power_W("gensetPowRef_W", 20),
+                                                     flag("gensetON", 40), sample_step(), counter()};
 inline constexpr SignalSpec kPlantStatusSignals[] = {
     {"step", 0, 32, false, 1, 0, 0, 4294967295.0, ""},
     {"fault", 32, 8, false, 1, 0, 0, 255, ""},
@@ -95,12 +101,20 @@ inline constexpr SignalSpec kEvSensors1Signals[] = {ev_request_Nm("driverRequest
 inline constexpr SignalSpec kEvSensors2Signals[] = {speed_rad_s("driveW_rad_s", 0), ev_torque_Nm("driveTauLim_Nm", 20),
                                                     power_W("drivePowDel_W", 40), counter()};
 inline constexpr SignalSpec kEvSensors3Signals[] = {power_W("batPowDel_W", 0), voltage_V(20), current_A(40), counter()};
+inline constexpr SignalSpec kShevSensors1Signals[] = {ev_torque_Nm("driverRequest_Nm", 0), vehicle_speed(20), soc(40),
+                                                      counter()};
+inline constexpr SignalSpec kShevSensors2Signals[] = {speed_rad_s("driveW_rad_s", 0), ev_torque_Nm("driveTauLim_Nm", 20),
+                                                      power_W("drivePowDc_W", 40), counter()};
+inline constexpr SignalSpec kShevSensors3Signals[] = {speed_rad_s("gensetW_rad_s", 0), power_W("gensetPowDc_W", 20),
+                                                      power_W("batPowDel_W", 40), counter()};
+inline constexpr SignalSpec kShevSensors4Signals[] = {voltage_V(0), current_A(20), counter()};
 }  // namespace detail
 
 inline constexpr MessageSpec kMessages[] = {
     {"PsdCommand1", kPsdCommand1, 8, 10, Sender::kEcu, detail::kPsdCommand1Signals},
     {"PsdCommand2", kPsdCommand2, 8, 10, Sender::kEcu, detail::kPsdCommand2Signals},
     {"EvCommand", kEvCommand, 8, 10, Sender::kEcu, detail::kEvCommandSignals},
+    {"ShevCommand", kShevCommand, 8, 10, Sender::kEcu, detail::kShevCommandSignals},
     {"PlantStatus", kPlantStatus, 8, 10, Sender::kPlant, detail::kPlantStatusSignals},
     {"PsdSensors1", kPsdSensors1, 8, 10, Sender::kPlant, detail::kPsdSensors1Signals},
     {"PsdSensors2", kPsdSensors2, 8, 10, Sender::kPlant, detail::kPsdSensors2Signals},
@@ -111,6 +125,10 @@ inline constexpr MessageSpec kMessages[] = {
     {"EvSensors1", kEvSensors1, 8, 10, Sender::kPlant, detail::kEvSensors1Signals},
     {"EvSensors2", kEvSensors2, 8, 10, Sender::kPlant, detail::kEvSensors2Signals},
     {"EvSensors3", kEvSensors3, 8, 10, Sender::kPlant, detail::kEvSensors3Signals},
+    {"ShevSensors1", kShevSensors1, 8, 10, Sender::kPlant, detail::kShevSensors1Signals},
+    {"ShevSensors2", kShevSensors2, 8, 10, Sender::kPlant, detail::kShevSensors2Signals},
+    {"ShevSensors3", kShevSensors3, 8, 10, Sender::kPlant, detail::kShevSensors3Signals},
+    {"ShevSensors4", kShevSensors4, 8, 10, Sender::kPlant, detail::kShevSensors4Signals},
 };
 inline constexpr std::size_t kMessageCount = std::size(kMessages);
 
@@ -142,7 +160,10 @@ constexpr const SignalSpec* find_signal(std::uint32_t id, std::string_view name)
 inline constexpr std::array<std::uint32_t, 7> kPsdSensorIds = {kPsdSensors1, kPsdSensors2, kPsdSensors3, kPsdSensors4,
                                                                kPsdSensors5, kPsdSensors6, kPlantStatus};
 inline constexpr std::array<std::uint32_t, 4> kEvSensorIds = {kEvSensors1, kEvSensors2, kEvSensors3, kPlantStatus};
+inline constexpr std::array<std::uint32_t, 5> kShevSensorIds = {kShevSensors1, kShevSensors2, kShevSensors3,
+                                                                kShevSensors4, kPlantStatus};
 inline constexpr std::array<std::uint32_t, 2> kPsdCommandIds = {kPsdCommand1, kPsdCommand2};
 inline constexpr std::array<std::uint32_t, 1> kEvCommandIds = {kEvCommand};
+inline constexpr std::array<std::uint32_t, 1> kShevCommandIds = {kShevCommand};
 
 }  // namespace ehpt::io::can

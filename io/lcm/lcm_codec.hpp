@@ -11,9 +11,12 @@
 #include <ehpt_lcm/ev_sensors_t.hpp>
 #include <ehpt_lcm/psd_command_t.hpp>
 #include <ehpt_lcm/psd_sensors_t.hpp>
+#include <ehpt_lcm/shev_command_t.hpp>
+#include <ehpt_lcm/shev_sensors_t.hpp>
 
 #include "msgs/ev.hpp"
 #include "msgs/psd.hpp"
+#include "msgs/shev.hpp"
 
 namespace ehpt::io::lcm {
 
@@ -29,6 +32,11 @@ template <>
 struct LcmTypesOf<msgs::EvSensors> {
   using SensorsMsg = ehpt_lcm::ev_sensors_t;
   using CommandMsg = ehpt_lcm::ev_command_t;
+};
+template <>
+struct LcmTypesOf<msgs::ShevSensors> {
+  using SensorsMsg = ehpt_lcm::shev_sensors_t;
+  using CommandMsg = ehpt_lcm::shev_command_t;
 };
 
 // Channels: <prefix>PLANT_STATUS (plant -> ECU), <prefix>ECU_COMMAND (ECU -> plant).
@@ -116,6 +124,44 @@ inline void from_lcm(const ehpt_lcm::ev_sensors_t& m, msgs::EvSensors& s) {
   s.locked = m.locked;
 }
 
+inline void to_lcm(const msgs::ShevSensors& s, std::int64_t utime, bool ecu_timeout, ehpt_lcm::shev_sensors_t& m) {
+  m.utime = utime;
+  m.step = s.stamp.step;
+  m.time_s = s.stamp.time_s;
+  m.driverRequest_Nm = s.driverRequest_Nm;
+  m.speed_m_s = s.speed_m_s;
+  m.driveW_rad_s = s.driveW_rad_s;
+  m.driveTauLim_Nm = s.driveTauLim_Nm;
+  m.drivePowDc_W = s.drivePowDc_W;
+  m.gensetW_rad_s = s.gensetW_rad_s;
+  m.gensetPowDc_W = s.gensetPowDc_W;
+  m.batSOC = s.batSOC;
+  m.batPowDel_W = s.batPowDel_W;
+  m.battery_voltage_V = s.battery_voltage_V;
+  m.battery_current_A = s.battery_current_A;
+  m.fault = static_cast<std::int32_t>(s.fault);
+  m.locked = s.locked;
+  m.ecuTimeout = ecu_timeout;
+}
+
+inline void from_lcm(const ehpt_lcm::shev_sensors_t& m, msgs::ShevSensors& s) {
+  s.stamp.step = m.step;
+  s.stamp.time_s = m.time_s;
+  s.driverRequest_Nm = m.driverRequest_Nm;
+  s.speed_m_s = m.speed_m_s;
+  s.driveW_rad_s = m.driveW_rad_s;
+  s.driveTauLim_Nm = m.driveTauLim_Nm;
+  s.drivePowDc_W = m.drivePowDc_W;
+  s.gensetW_rad_s = m.gensetW_rad_s;
+  s.gensetPowDc_W = m.gensetPowDc_W;
+  s.batSOC = m.batSOC;
+  s.batPowDel_W = m.batPowDel_W;
+  s.battery_voltage_V = m.battery_voltage_V;
+  s.battery_current_A = m.battery_current_A;
+  s.fault = static_cast<unsigned>(m.fault);
+  s.locked = m.locked;
+}
+
 // A command's step is the step of the sample it answers (its stamp's).
 inline void to_lcm(const msgs::PsdCommand& c, std::int64_t utime, ehpt_lcm::psd_command_t& m) {
   m.utime = utime;
@@ -145,6 +191,21 @@ inline void to_lcm(const msgs::EvCommand& c, std::int64_t utime, ehpt_lcm::ev_co
 inline void from_lcm(const ehpt_lcm::ev_command_t& m, msgs::EvCommand& c) {
   c.stamp.step = m.step;
   c.driveTauRef_Nm = m.driveTauRef_Nm;
+}
+
+inline void to_lcm(const msgs::ShevCommand& c, std::int64_t utime, ehpt_lcm::shev_command_t& m) {
+  m.utime = utime;
+  m.step = c.stamp.step;
+  m.driveTauRef_Nm = c.driveTauRef_Nm;
+  m.gensetPowRef_W = c.gensetPowRef_W;
+  m.gensetON = c.gensetON;
+}
+
+inline void from_lcm(const ehpt_lcm::shev_command_t& m, msgs::ShevCommand& c) {
+  c.stamp.step = m.step;
+  c.driveTauRef_Nm = m.driveTauRef_Nm;
+  c.gensetPowRef_W = m.gensetPowRef_W;
+  c.gensetON = m.gensetON;
 }
 
 }  // namespace ehpt::io::lcm

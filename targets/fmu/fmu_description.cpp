@@ -5,6 +5,7 @@
 #include <map>
 
 #include "ecu/psd_ecu.hpp"
+#include "ecu/shev_ems.hpp"
 #include "hil/run/simulation.hpp"
 #include "io/can/ls_bus.hpp"
 #include "io/junit.hpp"  // xml_escape
@@ -194,7 +195,9 @@ Description describe(const hil::Scenario& sc, EcuMode ecu, const std::vector<std
   Description d;
   d.ecu = ecu;
   d.role = role;
-  d.psd = sc.ecu.holds<ecu::PsdEcuParams>();
+  d.family = sc.ecu.holds<ecu::PsdEcuParams>()    ? MessageFamily::kPsd
+             : sc.ecu.holds<ecu::ShevEmsParams>() ? MessageFamily::kShev
+                                                  : MessageFamily::kEv;
   d.model_name = sc.name;
   d.description = sc.description;
   d.step_s = sc.solver.step_s;
@@ -228,10 +231,10 @@ Description describe(const hil::Scenario& sc, EcuMode ecu, const std::vector<std
   }
   if (ecu == EcuMode::kBus) add_bus_terminal(d, vr);
   if (ecu == EcuMode::kNone) {
-    if (d.psd) {
-      add_message_fields<msgs::PsdSensors, msgs::PsdCommand>(d, vr);
-    } else {
-      add_message_fields<msgs::EvSensors, msgs::EvCommand>(d, vr);
+    switch (d.family) {
+      case MessageFamily::kPsd: add_message_fields<msgs::PsdSensors, msgs::PsdCommand>(d, vr); break;
+      case MessageFamily::kShev: add_message_fields<msgs::ShevSensors, msgs::ShevCommand>(d, vr); break;
+      case MessageFamily::kEv: add_message_fields<msgs::EvSensors, msgs::EvCommand>(d, vr); break;
     }
   }
   for (const auto& [key, value] : numbers) {

@@ -54,10 +54,13 @@ struct Variable {
   double start = 0.0;        // an input's start value (the safe command: 0, engine off), a parameter's
 };
 
+// Whose messages a vehicle speaks (with --ecu none they are the FMU's inputs and outputs).
+enum class MessageFamily { kEv, kPsd, kShev };
+
 struct Description {
   EcuMode ecu = EcuMode::kBuiltin;
   Role role = Role::kPlant;
-  bool psd = false;           // the hybrid's messages (else the EV's)
+  MessageFamily family = MessageFamily::kEv;
   std::string model_name;     // the scenario's name
   std::string description;    // the scenario's
   double step_s = 0.0;        // the plant step: fixedInternalStepSize

@@ -148,37 +148,37 @@ bool Instance::enter_initialization(bool stop_defined, double start_s, double st
   return true;
 }
 
+namespace {
+// f(sensors, command, sensor field table, command field table) of the description's family
+template <class F>
+void with_messages(MessageFamily family, Messages& m, F&& f) {
+  switch (family) {
+    case MessageFamily::kPsd: f(m.psd_sensors, m.psd_command, msgs::kPsdSensorFieldTable, msgs::kPsdCommandFieldTable); return;
+    case MessageFamily::kShev:
+      f(m.shev_sensors, m.shev_command, msgs::kShevSensorFieldTable, msgs::kShevCommandFieldTable);
+      return;
+    case MessageFamily::kEv: f(m.ev_sensors, m.ev_command, msgs::kEvSensorFieldTable, msgs::kEvCommandFieldTable); return;
+  }
+}
+}  // namespace
+
 void Instance::refresh_outputs() {
   const std::span<const double> y = sim_->outputs();
-  if (ecu_ == EcuMode::kNone) {
-    if (description_.psd) {
-      sim_->read_sensors(psd_sensors_);
-    } else {
-      sim_->read_sensors(ev_sensors_);
-    }
-  }
   for (const auto& [vr, i] : signal_vrs_) values_[vr] = y[i];
-  for (const auto& [vr, i] : sensor_vrs_) {
-    values_[vr] = description_.psd ? msgs::kPsdSensorFieldTable[i].get(psd_sensors_)
-                                   : msgs::kEvSensorFieldTable[i].get(ev_sensors_);
-  }
+  if (ecu_ != EcuMode::kNone) return;
+  with_messages(description_.family, messages_, [&](auto& sensors, auto&, const auto& sensor_table, const auto&) {
+    sim_->read_sensors(sensors);
+    for (const auto& [vr, i] : sensor_vrs_) values_[vr] = sensor_table[i].get(sensors);
+  });
 }
 
 void Instance::apply_inputs() {
-  for (const auto& [vr, i] : command_vrs_) {
-    if (description_.psd) {
-      msgs::kPsdCommandFieldTable[i].set(psd_command_, values_[vr]);
-    } else {
-      msgs::kEvCommandFieldTable[i].set(ev_command_, values_[vr]);
-    }
-  }
-  if (description_.psd) {
-    psd_command_.stamp = psd_sensors_.stamp;  // the sample it answers
-    sim_->write_command(psd_command_);
-  } else {
-    ev_command_.stamp = ev_sensors_.stamp;
-    sim_->write_command(ev_command_);
-  }
+  with_messages(description_.family, messages_,
+                [&](auto& sensors, auto& command, const auto&, const auto& command_table) {
+                  for (const auto& [vr, i] : command_vrs_) command_table[i].set(command, values_[vr]);
+                  command.stamp = sensors.stamp;  // the sample it answers
+                  sim_->write_command(command);
+                });
 }
 
 bool Instance::reload(const char* call) {
@@ -423,10 +423,7 @@ bool Instance::get_state(std::unique_ptr<SavedState>& out) {
   out->sim = sim_->save_state();
   if (!out->sim) return fail(std::string(name(Call::kGetState)) + ": this simulation cannot save its state");
   out->values = values_;
-  out->psd_sensors = psd_sensors_;
-  out->ev_sensors = ev_sensors_;
-  out->psd_command = psd_command_;
-  out->ev_command = ev_command_;
+  out->messages = messages_;
   out->state = static_cast<int>(state_);
   out->stop_s = stop_s_;
   // the way here, for a serialised state: the settings the simulation was built with, the step
@@ -598,10 +595,7 @@ bool Instance::set_state(const SavedState& saved) {
     return fail(std::string(name(Call::kSetState)) + ": not a state of this FMU");
   }
   values_ = saved.values;
-  psd_sensors_ = saved.psd_sensors;
-  ev_sensors_ = saved.ev_sensors;
-  psd_command_ = saved.psd_command;
-  ev_command_ = saved.ev_command;
+  messages_ = saved.messages;
   state_ = static_cast<State>(saved.state);
   stop_s_ = saved.stop_s;
   return true;
@@ -649,10 +643,7 @@ bool Instance::reset() {
   sc_ = std::move(sc);
   stop_set_.clear();
   for (const Variable& v : description_.variables) values_[v.vr] = v.start;
-  psd_sensors_ = {};
-  ev_sensors_ = {};
-  psd_command_ = {};
-  ev_command_ = {};
+  messages_ = {};
   state_ = State::kInstantiated;
   return true;
 }

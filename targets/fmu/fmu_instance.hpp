@@ -33,6 +33,7 @@
 #include "io/can/ls_bus.hpp"
 #include "msgs/ev.hpp"
 #include "msgs/psd.hpp"
+#include "msgs/shev.hpp"
 #include "targets/fmu/fmu_description.hpp"
 
 namespace ehpt::fmu {
@@ -51,6 +52,16 @@ struct Log {
 // Which standard's functions call in: the names its messages give the calls.
 enum class Fmi { k2, k3 };
 
+// The message values of an FMU without its ECU (--ecu none), of whichever family it speaks.
+struct Messages {
+  msgs::EvSensors ev_sensors{};
+  msgs::PsdSensors psd_sensors{};
+  msgs::ShevSensors shev_sensors{};
+  msgs::EvCommand ev_command{};
+  msgs::PsdCommand psd_command{};
+  msgs::ShevCommand shev_command{};
+};
+
 // An FMU state (fmi3GetFMUState): everything an instance needs to go on from a point. A
 // serialised one (fmi3SerializeFMUState) holds the way there instead: the scenario's settings
 // (the parameters and stop time the instance had) and the plant step, with a digest of the
@@ -60,10 +71,7 @@ enum class Fmi { k2, k3 };
 struct SavedState {
   std::unique_ptr<hil::SimulationState> sim;
   std::vector<double> values;
-  msgs::PsdSensors psd_sensors{};
-  msgs::EvSensors ev_sensors{};
-  msgs::PsdCommand psd_command{};
-  msgs::EvCommand ev_command{};
+  Messages messages;
   int state = 0;
   double stop_s = 0.0;
   std::int64_t step = 0;           // the plant step it is at
@@ -185,10 +193,7 @@ class Instance {
   // (value reference, index) of the signals, the sensor fields and the command fields: what
   // each step refreshes or applies, without walking the parameters
   std::vector<std::pair<std::uint32_t, std::size_t>> signal_vrs_, sensor_vrs_, command_vrs_;
-  msgs::PsdSensors psd_sensors_{};
-  msgs::EvSensors ev_sensors_{};
-  msgs::PsdCommand psd_command_{};
-  msgs::EvCommand ev_command_{};
+  Messages messages_;  // --ecu none: the family's sensors read and command applied at each step
   // the bus terminal (ecu kBus): its Tx_Data as handed to the importer, whether Rx_Data came
   // since the last update, the plant's bus driver (hil/bus/bus_plant.hpp) or the ECU
   std::unique_ptr<io::can::ls_bus::LsBusTerminal> terminal_;

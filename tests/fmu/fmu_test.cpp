@@ -21,6 +21,7 @@
 #include "hil/run/simulation.hpp"
 #include "io/process.hpp"
 #include "msgs/psd.hpp"
+#include "msgs/shev.hpp"
 #include "test_plants.hpp"
 
 namespace ehpt::test {
@@ -717,6 +718,73 @@ TEST_F(Fmu3, WithoutItsEcuTheImporterDrivesThePlantThroughTheMessageFields) {
   const double v = 1.0;
   EXPECT_EQ(fmu.set_float64(inst, &bat, 1, &v, 1), fmi3Error);
   EXPECT_TRUE(logged(fmu, "fmi3SetFloat64: sensors.batSOC is an output"));
+  fmu.free_instance(inst);
+}
+
+// --ecu none for the series hybrid: the importer is its EMS (the driver's request to the drive,
+// a fixed 30 kW asked of the genset, on), through ShevSensors/ShevCommand as FMU variables,
+// bit for bit the same EMS through the facade.
+TEST_F(Fmu3, TheSeriesHybridsEmsIsTheImportersWithoutItsEcu) {
+  ASSERT_EQ(ehpt({"fmu", "shev_oo_sort1", "--ecu", "none", "--set", "solver.duration_s=20", "--out", *dir_ + "/s.fmu"}),
+            0);
+  Fmi3Fmu fmu;
+  std::string error;
+  ASSERT_TRUE(fmu.open(*dir_ + "/s.fmu", error)) << error;
+  const fmi3ValueReference request = fmu.vr.at("sensors.driverRequest_Nm"), drive = fmu.vr.at("command.driveTauRef_Nm"),
+                           power = fmu.vr.at("command.gensetPowRef_W"), genset_dc = fmu.vr.at("sensors.gensetPowDc_W");
+  const fmi3ValueReference on = fmu.boolean_vr.at("command.gensetON");
+  fmi3Instance inst = fmu.make_instance("plant");
+  ASSERT_NE(inst, nullptr) << (fmu.log.empty() ? "" : fmu.log.back());
+  ASSERT_EQ(fmu.enter_initialization(inst, fmi3False, 0.0, 0.0, fmi3True, 20.0), fmi3OK);
+  ASSERT_EQ(fmu.exit_initialization(inst), fmi3OK);
+
+  hil::Scenario sc = test::load(test::source_path("scenarios/shev_oo_sort1.toml"), {"solver.duration_s=20"});
+  hil::SimulationOptions opt;
+  opt.external_ecu = true;
+  auto sim = hil::make_simulation(sc, opt);
+  std::vector<fmi3ValueReference> refs;
+  for (const std::string& n : fmu.output_names) {
+    if (n.rfind("sensors.", 0) != 0) refs.push_back(fmu.vr.at(n));
+  }
+  std::vector<double> y(refs.size());
+  double last_genset_dc_W = 0.0;
+  for (std::int64_t n = 0; n < 2000; ++n) {
+    msgs::ShevSensors s;
+    ASSERT_TRUE(sim->read_sensors(s));
+    msgs::ShevCommand c;
+    c.driveTauRef_Nm = s.driverRequest_Nm;
+    c.gensetPowRef_W = 30000.0;
+    c.gensetON = true;
+    c.stamp = s.stamp;
+    ASSERT_TRUE(sim->write_command(c));
+    ASSERT_EQ(sim->step(10), 10);
+    double r = 0.0;
+    ASSERT_EQ(fmu.get_float64(inst, &request, 1, &r, 1), fmi3OK);
+    ASSERT_TRUE(same_bits(r, s.driverRequest_Nm)) << n;
+    const double p = 30000.0;
+    const fmi3Boolean yes = fmi3True;
+    ASSERT_EQ(fmu.set_float64(inst, &drive, 1, &r, 1), fmi3OK);
+    ASSERT_EQ(fmu.set_float64(inst, &power, 1, &p, 1), fmi3OK);
+    ASSERT_EQ(fmu.set_boolean(inst, &on, 1, &yes, 1), fmi3OK);
+    fmi3Boolean e, term, early;
+    fmi3Float64 last;
+    ASSERT_EQ(fmu.do_step(inst, static_cast<double>(n) * 0.01, 0.01, fmi3True, &e, &term, &early, &last), fmi3OK)
+        << (fmu.log.empty() ? "" : fmu.log.back());
+    ASSERT_EQ(fmu.get_float64(inst, refs.data(), refs.size(), y.data(), y.size()), fmi3OK);
+    const std::span<const double> want = sim->outputs();
+    std::size_t j = 0;
+    for (const std::string& name : fmu.output_names) {
+      if (name.rfind("sensors.", 0) == 0) continue;
+      const auto& signals = sim->signals();
+      const auto it = std::find_if(signals.begin(), signals.end(), [&](const auto& x) { return x.name == name; });
+      ASSERT_NE(it, signals.end()) << name;
+      ASSERT_TRUE(same_bits(y[j], want[static_cast<std::size_t>(it - signals.begin())]))
+          << name << " at step " << (n + 1) * 10 << ": FMU " << y[j];
+      ++j;
+    }
+    ASSERT_EQ(fmu.get_float64(inst, &genset_dc, 1, &last_genset_dc_W, 1), fmi3OK);
+  }
+  EXPECT_GT(last_genset_dc_W, 20000.0);  // the genset delivers what the importer asked for
   fmu.free_instance(inst);
 }
 

@@ -89,8 +89,8 @@ struct Report {
 // ---------------------------------------------------------------------------------------------
 // ehpt's own contract through the binding: the codec's frames, bit for bit.
 
-TEST(DefaultBinding, BothFamiliesLoadCleanAndListTheContractsIdsInOrder) {
-  for (const char* family : {"psd", "ev"}) {
+TEST(DefaultBinding, EveryFamilyLoadsCleanAndListsTheContractsIdsInOrder) {
+  for (const char* family : {"psd", "ev", "shev"}) {
     std::vector<std::string> errors;
     const auto b = parse_binding(builtin_binding_text(family), "b.toml", builtin_ehpt_dbc(), "ehpt.dbc", family, kPeriod,
                                  errors);
@@ -103,10 +103,19 @@ TEST(DefaultBinding, BothFamiliesLoadCleanAndListTheContractsIdsInOrder) {
   for (const auto& m : psd.send) sent.push_back(m.message->id);
   EXPECT_EQ(sent, std::vector<std::uint32_t>(io::can::kPsdSensorIds.begin(), io::can::kPsdSensorIds.end()));
   EXPECT_EQ(psd.receive_ids(), std::vector<std::uint32_t>(io::can::kPsdCommandIds.begin(), io::can::kPsdCommandIds.end()));
+  const Binding shev = contract("shev");
+  sent.clear();
+  for (const auto& m : shev.send) sent.push_back(m.message->id);
+  EXPECT_EQ(sent, (std::vector<std::uint32_t>{0x230, 0x231, 0x232, 0x233, 0x200}));
+  EXPECT_EQ(shev.receive_ids(), std::vector<std::uint32_t>{0x130});
   // the files in the source tree are what is compiled in, and load by path as any binding does
-  std::vector<std::string> errors;
-  EXPECT_TRUE(load_binding(test::source_path("io/can/ehpt-ev.binding.toml"), "ev", kPeriod, errors))
-      << (errors.empty() ? "" : errors.front());
+  for (const char* family : {"psd", "ev", "shev"}) {
+    std::vector<std::string> errors;
+    EXPECT_TRUE(load_binding(test::source_path("io/can/ehpt-" + std::string(family) + ".binding.toml"), family, kPeriod,
+                             errors))
+        << family << ": " << (errors.empty() ? "" : errors.front());
+  }
+  EXPECT_TRUE(builtin_binding_text("hev").empty());
 }
 
 msgs::PsdSensors random_sensors(std::mt19937_64& rng, double spread) {

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 #include <stdlib.h>  // mkdtemp
 
@@ -84,15 +85,16 @@ std::string fresh(const char* name) {
 }
 
 io::JsonValue run(const std::vector<std::string>& sets, const std::vector<std::string>& faults, bool in_process_bus,
-                  std::string& log_text) {
+                  std::string& log_text, const char* scenario = "ev_nedc", std::string* out_dir = nullptr) {
   Scenario sc;
   std::vector<std::string> errors;
-  EXPECT_TRUE(load_scenario(test::source_path("scenarios/ev_nedc.toml"), sets, faults, sc, errors))
+  EXPECT_TRUE(load_scenario(test::source_path("scenarios/" + std::string(scenario) + ".toml"), sets, faults, sc, errors))
       << (errors.empty() ? "" : errors[0]);
   std::string error;
   std::unique_ptr<ExternalDriver> bus;
   BatchOptions opt;
   opt.out_dir = fresh("run");
+  if (out_dir != nullptr) *out_dir = opt.out_dir;
   if (in_process_bus) {
     bus = make_in_process_bus(sc, BusPlantOptions{}, error);
     EXPECT_NE(bus, nullptr) << error;
@@ -149,6 +151,60 @@ TEST(InProcessBus, EqualsTheCodecRunAndActsOutABusFault) {
   EXPECT_EQ(at(sensors_lost, {"ecu_in_process", "frames_rejected"}), "1");
   EXPECT_EQ(at(sensors_lost, {"ecu_in_process", "samples_answered"}), "1995");
   EXPECT_EQ(at(sensors_lost, {"bus", "samples_not_awaited"}), "6");
+}
+
+// The series hybrid's EMS over the in-process bus: its frames (ShevSensors1..4, PlantStatus,
+// ShevCommand) carry the run of the codec reference through a genset start (267.31 s), and a
+// lost ShevCommand puts the plant in its safe state.
+TEST(InProcessBus, TheSeriesHybridEqualsItsCodecRunAndActsOutABusFault) {
+  std::string log;
+  const std::vector<std::string> sets = {"solver.duration_s=300"};
+  std::vector<std::string> codec_sets = sets;
+  codec_sets.emplace_back("vehicle.ecu.codec=can");
+  const io::JsonValue codec = run(codec_sets, {}, false, log, "shev_oo_sort1");
+  const io::JsonValue plain = run(sets, {}, false, log, "shev_oo_sort1");
+  const io::JsonValue clean = run(sets, {}, true, log, "shev_oo_sort1");
+  EXPECT_EQ(at(clean, {"trajectory_hash"}), at(codec, {"trajectory_hash"}));
+  EXPECT_NE(at(plain, {"trajectory_hash"}), at(codec, {"trajectory_hash"}));  // the codec's quantisation shows
+  EXPECT_EQ(at(clean, {"status"}), "ok") << log;
+  EXPECT_EQ(at(clean, {"bus", "timeouts"}), "0");
+  EXPECT_EQ(at(clean, {"ecu_in_process", "samples_answered"}), "30001");
+  EXPECT_EQ(at(clean, {"ecu_in_process", "incomplete_samples"}), "0");
+  EXPECT_EQ(at(clean, {"ecu_in_process", "saturated_signals"}), "0");
+
+  std::string dir;
+  const io::JsonValue faulted =
+      run(sets, {"kind=drop target=ShevCommand at_s=280 until_s=280.05"}, true, log, "shev_oo_sort1", &dir);
+  EXPECT_NE(at(faulted, {"trajectory_hash"}), at(codec, {"trajectory_hash"}));
+  EXPECT_EQ(at(faulted, {"status"}), "ok") << log;
+  EXPECT_EQ(at(faulted, {"bus", "timeouts"}), "1");
+  EXPECT_EQ(at(faulted, {"bus", "commands_lost_to_faults"}), "5");
+  EXPECT_EQ(at(faulted, {"ecu_in_process", "samples_answered"}), "30001");
+  // the safe state, as inputs.log recorded it: no torque, no genset power, and the genset left
+  // on (it was running: a stale message must not stop it), between two commands of the EMS
+  // that had it on with power asked
+  std::ifstream in(dir + "/inputs.log");
+  ASSERT_TRUE(in) << dir;
+  std::vector<std::vector<std::string>> around;
+  for (std::string line; std::getline(in, line);) {
+    std::istringstream ls(line);
+    std::vector<std::string> t;
+    for (std::string w; ls >> w;) t.push_back(w);
+    if (t.size() == 8 && t[0] == "shev" && std::stoll(t[1]) >= 279990 && std::stoll(t[1]) <= 280100) around.push_back(t);
+  }
+  ASSERT_GE(around.size(), 3u);
+  int safe = 0;
+  for (std::size_t i = 0; i < around.size(); ++i) {
+    const auto& t = around[i];
+    if (t[5] == "0" && t[6] == "0") {
+      ++safe;
+      EXPECT_EQ(t[7], "1") << "gensetON in the safe state at step " << t[1];
+      ASSERT_GT(i, 0u);
+      EXPECT_GT(std::stod(around[i - 1][6]), 30000.0) << "the EMS's command before: " << around[i - 1][1];
+      EXPECT_EQ(around[i - 1][7], "1");
+    }
+  }
+  EXPECT_EQ(safe, 1);
 }
 
 // What the in-process bus cannot run, it says before anything runs.

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <set>
 
 #include "ecu/psd_ecu.hpp"
 #include "hil/config/scenario.hpp"
@@ -108,7 +109,12 @@ namespace {
 // The contract's ranges (io/can/ehpt.dbc) hold every shipped cycle: no signal saturates when
 // the built-in ECU talks through the CAN codec, on any EV or hybrid scenario.
 TEST(CanContract, NoShippedScenarioSaturatesASignal) {
-  test::ExpectFault known;  // psecu1_wltc3: MBecu1 has no SOC loop, the SOC leaves its window
+  // psecu1_wltc3: MBecu1 has no SOC loop, the SOC leaves its window; the series-hybrid buses on
+  // NEDC (docs/scenarios.md): SHEVpowerFilt drains its pack, the two ON/OFF buses exceed the
+  // cell current
+  test::ExpectFault known;
+  const std::set<std::string> faulted = {"psecu1_wltc3", "shev_power_filt_nedc", "shev_oo_nedc",
+                                         "shev_oo_nomaps_nedc"};
   int checked = 0;
   for (const auto& entry : list_scenarios(test::source_path("scenarios"))) {
     Scenario sc;
@@ -120,10 +126,10 @@ TEST(CanContract, NoShippedScenarioSaturatesASignal) {
     auto sim = make_simulation(sc, SimulationOptions{});
     while (!sim->finished()) sim->run();
     EXPECT_EQ(sim->ecu_codec_saturations(), 0) << entry.name;
-    EXPECT_EQ(sim->stats().fault != 0, entry.name == "psecu1_wltc3") << entry.name;
+    EXPECT_EQ(sim->stats().fault != 0, faulted.count(entry.name) == 1) << entry.name;
     ++checked;
   }
-  EXPECT_GE(checked, 27);  // 9 EV and 18 hybrid scenarios
+  EXPECT_GE(checked, 35);  // 9 EV, 18 power-split and 8 series-hybrid scenarios
 }
 
 }  // namespace

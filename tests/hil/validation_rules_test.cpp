@@ -544,7 +544,6 @@ TEST(ReaderRules, EachValueOfTheWrongKindIsNamed) {
            {"shev_power_filt_sort1", {"vehicle.ecu.soc_gain_W=1e5"}, "PowerFilt has no SOC loop: use kind = \"PowerFiltSoc\""},
            {"shev_power_filt_soc_sort1", {"vehicle.ecu.on_W=6e4"}, "only ShevEMS switches the genset on and off"},
            {"shev_power_filt_soc_sort1", {"vehicle.ecu.off_W=3e4"}, "only ShevEMS switches the genset on and off"},
-           {"shev_oo_sort1", {"vehicle.ecu.codec=\"can\""}, "the series hybrid has no CAN message set in the contract yet"},
            {"shev_oo_sort1", {"vehicle.genset.ice.on_off=false"}, "ShevEMS switches the genset off through gensetON", true},
            {"shev_oo_nomaps_sort1", {"vehicle.genset.ice.sfc_map=\"" + test::source_path("data/maps/map_shev_ice_sfc.csv") + "\""},
             "give either sfc_map or sfc_g_kWh, not both"},

@@ -207,7 +207,7 @@ TEST(CanContract, DbcMatchesContractSignalBySignal) {
     EXPECT_EQ(m.signals.back().start_bit, 60) << m.name;
     EXPECT_EQ(m.signals.back().length, 4) << m.name;
   }
-  EXPECT_EQ(signals, 51u);
+  EXPECT_EQ(signals, 51u + 20u);  // the series hybrid's: 15 in ShevSensors1..4, 5 in ShevCommand
   // the DBC itself obeys the layout rules too (it equals the tables, checked above)
   const std::vector<std::string> problems = layout_problems(kMessages);
   EXPECT_TRUE(problems.empty()) << joined(problems);
@@ -248,8 +248,10 @@ TEST(CanContract, ComparisonReportsEveryKindOfDrift) {
        "PsdSensors1.counter: start bit 56"},
       {"sampleStep : 44|16@1+ (1,0) [0|65535] \"\" Plant\n SG_ counter : 60|4@1+ (1,0) [0|15] \"\" Plant\n\nBO_ 512",
        "sampleStep : 44|15@1+ (1,0) [0|65535] \"\" Plant\n SG_ counter : 60|4@1+ (1,0) [0|15] \"\" Plant\n\nBO_ 512",
-       "EvCommand.sampleStep: length 15"},
-      {" SG_ fault : 32|8@1+", " SG_ fault : 32|8@2+", "ehpt.dbc:33: the byte order (0 Motorola, 1 Intel) '2'"},
+       "ShevCommand.sampleStep: length 15"},
+      {" SG_ fault : 32|8@1+", " SG_ fault : 32|8@2+", "ehpt.dbc:40: the byte order (0 Motorola, 1 Intel) '2'"},
+      {"gensetON : 40|1@1+", "gensetON : 41|1@1+", "ShevCommand.gensetON: start bit 41"},
+      {"drivePowDc_W : 40|20@1- (0.5,0)", "drivePowDc_W : 40|20@1- (1,0)", "ShevSensors2.drivePowDc_W: factor 1"},
   };
   for (const Drift& d : drifts) {
     const std::size_t at = text.find(d.from);
@@ -346,6 +348,23 @@ const TestField<msgs::PsdCommand> kPsdCommandFields[] = {
 const TestField<msgs::EvCommand> kEvCommandFields[] = {
     {kEvCommand, "driveTauRef_Nm", &msgs::EvCommand::driveTauRef_Nm},
 };
+const TestField<msgs::ShevSensors> kShevSensorFields[] = {
+    {kShevSensors1, "driverRequest_Nm", &msgs::ShevSensors::driverRequest_Nm},
+    {kShevSensors1, "speed_m_s", &msgs::ShevSensors::speed_m_s},
+    {kShevSensors1, "batSOC", &msgs::ShevSensors::batSOC},
+    {kShevSensors2, "driveW_rad_s", &msgs::ShevSensors::driveW_rad_s},
+    {kShevSensors2, "driveTauLim_Nm", &msgs::ShevSensors::driveTauLim_Nm},
+    {kShevSensors2, "drivePowDc_W", &msgs::ShevSensors::drivePowDc_W},
+    {kShevSensors3, "gensetW_rad_s", &msgs::ShevSensors::gensetW_rad_s},
+    {kShevSensors3, "gensetPowDc_W", &msgs::ShevSensors::gensetPowDc_W},
+    {kShevSensors3, "batPowDel_W", &msgs::ShevSensors::batPowDel_W},
+    {kShevSensors4, "battery_voltage_V", &msgs::ShevSensors::battery_voltage_V},
+    {kShevSensors4, "battery_current_A", &msgs::ShevSensors::battery_current_A},
+};
+const TestField<msgs::ShevCommand> kShevCommandFields[] = {
+    {kShevCommand, "driveTauRef_Nm", &msgs::ShevCommand::driveTauRef_Nm},
+    {kShevCommand, "gensetPowRef_W", &msgs::ShevCommand::gensetPowRef_W},
+};
 
 template <class Msg>
 const SignalSpec& spec_of(const TestField<Msg>& f) {
@@ -372,15 +391,18 @@ TEST(CanCodec, TestTablesCoverEverySignal) {
       for (const auto& f : kEvSensorFields) uses += (f.id == m.id && f.signal == s.name) ? 1 : 0;
       for (const auto& f : kPsdCommandFields) uses += (f.id == m.id && f.signal == s.name) ? 1 : 0;
       for (const auto& f : kEvCommandFields) uses += (f.id == m.id && f.signal == s.name) ? 1 : 0;
+      for (const auto& f : kShevSensorFields) uses += (f.id == m.id && f.signal == s.name) ? 1 : 0;
+      for (const auto& f : kShevCommandFields) uses += (f.id == m.id && f.signal == s.name) ? 1 : 0;
       uses += (m.id == kPsdCommand1 && s.name == "iceON") ? 1 : 0;
-      const bool command = m.id == kPsdCommand1 || m.id == kPsdCommand2 || m.id == kEvCommand;
+      uses += (m.id == kShevCommand && s.name == "gensetON") ? 1 : 0;
+      const bool command = m.id == kPsdCommand1 || m.id == kPsdCommand2 || m.id == kEvCommand || m.id == kShevCommand;
       uses += (command && s.name == "sampleStep") ? 1 : 0;  // CanCodec.CommandsEchoTheirStampStep...
       uses += (m.id == kPlantStatus || s.name == "counter") ? 1 : 0;
       EXPECT_EQ(uses, 1) << m.name << "." << s.name;
       covered += uses;
     }
   }
-  EXPECT_EQ(covered, 51);
+  EXPECT_EQ(covered, 51 + 20);  // the series hybrid: 11 sensor fields, 4 counters; 3 command fields, echo, counter
 }
 
 // Decodes frames as the receiving side does: filter first, apply only what it accepts.
@@ -475,6 +497,75 @@ TEST(CanCodec, EvSensorsRoundTripEveryFieldWithinHalfAStep) {
     receive_all<msgs::EvSensors, kEvSensorIds.size()>(frames, kEvSensorIds, out);
     expect_fields_near(kEvSensorFields, in, out, "EvSensors");
   }
+}
+
+TEST(CanCodec, ShevSensorsRoundTripEveryFieldWithinHalfAStep) {
+  std::mt19937_64 rng(25);
+  for (Pick pick : kPicks) {
+    const msgs::ShevSensors in = fill(kShevSensorFields, pick, rng);
+    TxCounters tx;
+    std::array<Frame, kShevSensorIds.size()> frames;
+    PlantStatus status;
+    status.step = 123456;
+    status.fault = 2;
+    status.locked = pick == Pick::kZero;
+    EXPECT_EQ(encode(in, status, tx, frames), 0);
+    const std::uint32_t ids[] = {0x230, 0x231, 0x232, 0x233, 0x200};  // ShevSensors1..4, PlantStatus last
+    for (std::size_t i = 0; i < frames.size(); ++i) EXPECT_EQ(frames[i].id, ids[i]);
+    msgs::ShevSensors out{};
+    PlantStatus got;
+    receive_all<msgs::ShevSensors, kShevSensorIds.size()>(frames, kShevSensorIds, out, &got);
+    expect_fields_near(kShevSensorFields, in, out, "ShevSensors");
+    EXPECT_EQ(got.step, 123456u);
+    EXPECT_EQ(got.fault, 2u);
+    EXPECT_EQ(got.locked, pick == Pick::kZero);
+  }
+  // a value known by hand: drivePowDc_W = 104 800.5 W is raw 209 601 at bit 40 of ShevSensors2
+  TxCounters tx;
+  std::array<Frame, kShevSensorIds.size()> frames;
+  msgs::ShevSensors in{};
+  in.drivePowDc_W = 104800.5;
+  in.gensetPowDc_W = -1.0;  // raw -2: 20 bits of two's complement at bit 20 of ShevSensors3
+  encode(in, PlantStatus{}, tx, frames);
+  std::uint64_t bits2 = 0, bits3 = 0;
+  for (std::size_t i = 0; i < 8; ++i) {
+    bits2 |= static_cast<std::uint64_t>(frames[1].data[i]) << (8 * i);
+    bits3 |= static_cast<std::uint64_t>(frames[2].data[i]) << (8 * i);
+  }
+  EXPECT_EQ((bits2 >> 40) & 0xFFFFF, 209601u);
+  EXPECT_EQ((bits3 >> 20) & 0xFFFFF, 0xFFFFEu);
+}
+
+TEST(CanCodec, ShevCommandRoundTripsAndEchoesItsStepInOneFrame) {
+  std::mt19937_64 rng(26);
+  int n = 0;
+  for (Pick pick : kPicks) {
+    msgs::ShevCommand in = fill(kShevCommandFields, pick, rng);
+    in.gensetON = (n++ % 2) == 0;
+    in.stamp.step = static_cast<std::int64_t>(rng() >> 20);
+    TxCounters tx;
+    std::array<Frame, kShevCommandIds.size()> frames;
+    EXPECT_EQ(encode(in, tx, frames), 0);
+    EXPECT_EQ(frames[0].id, 0x130u);
+    EXPECT_EQ((payload(frames[0]) >> 44) & 0xFFFF, static_cast<std::uint64_t>(in.stamp.step % 65536));
+    EXPECT_EQ((payload(frames[0]) >> 40) & 1, in.gensetON ? 1u : 0u);
+    msgs::ShevCommand out{};
+    out.gensetON = !in.gensetON;
+    receive_all<msgs::ShevCommand, 1>(frames, kShevCommandIds, out);
+    expect_fields_near(kShevCommandFields, in, out, "ShevCommand");
+    EXPECT_EQ(out.gensetON, in.gensetON);
+  }
+  // a torque beyond the signal's +-5000 N m is sent as the end and counted
+  msgs::ShevCommand big{};
+  big.driveTauRef_Nm = 6000.0;
+  big.gensetPowRef_W = 300000.0;
+  TxCounters tx;
+  std::array<Frame, 1> frames;
+  EXPECT_EQ(encode(big, tx, frames), 2);
+  msgs::ShevCommand out{};
+  receive_all<msgs::ShevCommand, 1>(frames, kShevCommandIds, out);
+  EXPECT_EQ(out.driveTauRef_Nm, 5000.0);
+  EXPECT_EQ(out.gensetPowRef_W, 250000.0);
 }
 
 // The payload of a frame and a command's sampleStep (bits 44..59), read here, not by the codec.

@@ -123,6 +123,44 @@ TEST(LcmTypes, EveryFieldRoundTripsExactly) {
   msgs::EvCommand ecb;
   io::lcm::from_lcm(round_trip(ecm), ecb);
   EXPECT_EQ(ecb.driveTauRef_Nm, 10.4166666);
+
+  // the series hybrid: every field a different value, both signs, bit for bit
+  msgs::ShevSensors h;
+  h.stamp = {267.31, 267310, 26731};
+  v = 0.3;
+  for (double* f : {&h.driverRequest_Nm, &h.speed_m_s, &h.driveW_rad_s, &h.driveTauLim_Nm, &h.drivePowDc_W,
+                    &h.gensetW_rad_s, &h.gensetPowDc_W, &h.batSOC, &h.batPowDel_W, &h.battery_voltage_V,
+                    &h.battery_current_A}) {
+    *f = (v *= -1.9);
+  }
+  h.fault = 2;
+  h.locked = true;
+  ehpt_lcm::shev_sensors_t hm{};
+  io::lcm::to_lcm(h, 7, true, hm);
+  const auto back_h = round_trip(hm);
+  EXPECT_TRUE(back_h.ecuTimeout);
+  msgs::ShevSensors hb;
+  io::lcm::from_lcm(back_h, hb);
+  EXPECT_EQ(hb.stamp.step, 267310);
+  EXPECT_EQ(hb.stamp.time_s, 267.31);
+  EXPECT_EQ(std::memcmp(&hb.driverRequest_Nm, &h.driverRequest_Nm, 11 * sizeof(double)), 0);
+  EXPECT_EQ(hb.fault, 2u);
+  EXPECT_TRUE(hb.locked);
+
+  msgs::ShevCommand hc;
+  hc.stamp.step = 373250;
+  hc.driveTauRef_Nm = -1234.5678;
+  hc.gensetPowRef_W = 61234.25;
+  hc.gensetON = false;
+  ehpt_lcm::shev_command_t hcm{};
+  io::lcm::to_lcm(hc, 5, hcm);
+  msgs::ShevCommand hcb;
+  hcb.gensetON = true;
+  io::lcm::from_lcm(round_trip(hcm), hcb);
+  EXPECT_EQ(hcb.stamp.step, 373250);
+  EXPECT_EQ(hcb.driveTauRef_Nm, -1234.5678);
+  EXPECT_EQ(hcb.gensetPowRef_W, 61234.25);
+  EXPECT_FALSE(hcb.gensetON);
 }
 
 TEST(LcmSpec, UrlsAreCheckedBeforeAnythingOpens) {

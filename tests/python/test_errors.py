@@ -77,10 +77,15 @@ class LoadErrors(unittest.TestCase):
         with self.assertRaises(ValueError) as cm:
             ehpt.Simulation("battery_cc_discharge", external_ecu=True)
         self.assertIn("no ECU", str(cm.exception))
-        # the series hybrid runs with its built-in EMS; its messages are not on the bus yet
-        with self.assertRaises(ValueError) as cm:
-            ehpt.Simulation("shev_oo_sort1", external_ecu=True)
-        self.assertIn("ECU messages are not in ehpt's bus contract yet", str(cm.exception))
+        # the series hybrid's EMS can be replaced: read_sensors gives ShevSensors, and only a
+        # ShevCommand is taken
+        sim = ehpt.Simulation("shev_oo_sort1", set={"solver.duration_s": 1}, external_ecu=True)
+        self.assertIsInstance(sim.read_sensors(), ehpt.ShevSensors)
+        with self.assertRaises(TypeError) as cm:
+            sim.write_command(ehpt.EvCommand(driveTauRef_Nm=1.0))
+        self.assertIn("an ehpt.ShevCommand", str(cm.exception))
+        with self.assertRaises(ehpt.Error):
+            sim.write_command(ehpt.ShevCommand(gensetPowRef_W=float("nan")))
         r = ehpt.run("shev_oo_sort1", set={"solver.duration_s": 1})
         self.assertEqual(r.exit_code, 0)
         self.assertEqual(r.timeseries["genset_speed_rad_s"][0], 300.0)

@@ -17,6 +17,7 @@ from ehpt_test_support import WorkDir, assert_same_bits
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "python", "examples"))
 import mbecu2_ecu  # noqa: E402
+import shev_ems  # noqa: E402
 
 work = None
 
@@ -74,6 +75,29 @@ class PythonEcuReproducesBuiltIn(unittest.TestCase):
     def test_ev_follower(self):
         sim = follower_run("ev_nedc")
         assert_same_bits(self, sim.timeseries(), ehpt.run("ev_nedc").timeseries, "ev_nedc with the Python follower")
+
+    def test_series_hybrid_ems(self):
+        # ShevEMS through a genset start and stop (267.31 s, 373.25 s), and PowerFilt
+        for scenario, kind in (("shev_oo_sort1", "ShevEMS"), ("shev_power_filt_sort1", "PowerFilt")):
+            overrides = {"solver.duration_s": 400}
+            sim = shev_ems.run_with_python_ems(scenario, overrides)
+            self.assertEqual(sim.ecu_parameters["kind"], kind)
+            builtin = ehpt.run(scenario, set=overrides)
+            assert_same_bits(self, sim.timeseries(), builtin.timeseries, scenario + " with the Python EMS")
+            self.assertEqual(repr(sim.stats()["fuel_g"]), repr(builtin.summary["fuel_g"]))
+        self.assertGreater(builtin.summary["fuel_g"], 0.0)
+
+        # the same EMS with a 1 W hysteresis instead of 30 kW: the comparison must see it
+        class NoHysteresis(shev_ems.ShevEms):
+            def __init__(self, params):
+                super().__init__(params)
+                self.off_W = self.on_W - 1.0
+
+        overrides = {"solver.duration_s": 400}
+        builtin = ehpt.run("shev_oo_sort1", set=overrides).timeseries
+        sim = shev_ems.run_with_python_ems("shev_oo_sort1", overrides, NoHysteresis)
+        with self.assertRaises(AssertionError):
+            assert_same_bits(self, sim.timeseries(), builtin, "")
 
     def test_a_different_ecu_differs(self):
         # the same ECU with soc_ref two ulps off: the comparison must see it

@@ -21,7 +21,7 @@ import unittest
 
 import ehpt
 
-MESSAGE_CLASSES = ("Stamp", "PsdSensors", "PsdCommand", "EvSensors", "EvCommand")
+MESSAGE_CLASSES = ("Stamp", "PsdSensors", "PsdCommand", "EvSensors", "EvCommand", "ShevSensors", "ShevCommand")
 PYTHON_CLASSES = ("Problem", "Error")  # written in Python inside the module: inspect.signature works
 
 

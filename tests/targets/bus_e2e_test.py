@@ -27,7 +27,7 @@ from ehpt_dbc import Dbc  # noqa: E402
 
 EHPT = None  # set from argv
 DBC = Dbc(SOURCE / "io" / "can" / "ehpt.dbc")
-COMMAND_IDS = {0x110, 0x111, 0x120}
+COMMAND_IDS = {0x110, 0x111, 0x120, 0x130}
 
 
 def free_port():
@@ -175,6 +175,67 @@ class Lockstep(BusTest):
                 self.assertAlmostEqual(sensors["iceW_rad_s"], row["iceW_rad_s"], delta=0.01 / 2 + 1e-9)
                 checked += 1
         self.assertGreater(checked, 1900)
+
+    def test_series_hybrid_with_ehpt_ecu_is_bit_identical_and_replays(self):
+        """SHEV_OO, 400 s of Sort1: the plant and its EMS (ShevEMS) as two processes in lockstep
+        over socketcand == the in-process run through the codec, byte for byte, through the
+        genset's start at 267.31 s and stop at 373.25 s; bus.log decodes (ShevSensors1..4,
+        PlantStatus, ShevCommand) to the plant's signals, gensetON switches on the frames where
+        the run switches; the session replays from its inputs.log bit for bit."""
+        sets = ["solver.duration_s=400"]
+        ref = self.reference("shev_oo_sort1", sets, "ref")
+        port = free_port()
+        session = self.tmp / "bus"
+        plant = self.plant("shev_oo_sort1", port, session, "--lockstep", "--set", sets[0])
+        ecu = self.ecu("shev_oo_sort1", port, "--set", sets[0])
+        rc, _, err = self.finish(plant)
+        self.assertEqual(rc, 0, err)
+        rc, out, err = self.finish(ecu)
+        self.assertEqual(rc, 0, err)
+        self.assertIn("40001 samples answered", out + err)
+        self.assertEqual((ref / "timeseries.csv").read_bytes(), (session / "timeseries.csv").read_bytes())
+        summary = json.loads((session / "summary.json").read_text())
+        self.assertEqual(summary["status"], "ok")
+        bus = summary["bus"]
+        self.assertEqual(bus["commands_applied"], 40001)
+        self.assertEqual(bus["timeouts"], 0)
+        self.assertEqual(bus["saturated_signals"], 0)
+        self.assertEqual(sum(bus["rejected"].values()), 0)
+        self.assertGreater(summary["fuel_g"], 10.0)  # the genset ran
+
+        frames = read_log(session / "bus.log")
+        self.assertEqual(len(frames), 40001 * 6)  # 4 sensor frames + status, 1 command
+        self.assertEqual({i for _, i, _ in frames}, {0x230, 0x231, 0x232, 0x233, 0x200, 0x130})
+        rows = {round(r["time_s"] * 1000): r for r in csv_rows(session / "timeseries.csv")}
+        on_steps, last_on, sensors, step, checked = [], False, {}, None, 0
+        for _, i, d in frames:
+            name, sig = DBC.decode(i, d)
+            if name.startswith("ShevSensors"):
+                sensors.update(sig)
+            elif name == "PlantStatus":
+                step = sig["step"]
+            elif name == "ShevCommand":
+                self.assertEqual(sig["sampleStep"], step % 65536)
+                if sig["gensetON"] != last_on:
+                    on_steps.append(step)
+                    last_on = sig["gensetON"]
+                if step % 1000 == 0:
+                    row = rows[step]
+                    self.assertAlmostEqual(sensors["speed_m_s"], row["speed_m_s"], delta=0.0002 / 2 + 1e-12)
+                    self.assertAlmostEqual(sensors["batSOC"], row["soc"], delta=1e-6 / 2 + 1e-12)
+                    self.assertAlmostEqual(sig["driveTauRef_Nm"], sensors["driverRequest_Nm"], delta=1e-9)
+                    checked += 1
+        self.assertEqual(checked, 401)
+        self.assertEqual(len(on_steps), 2, on_steps)  # one start, one stop
+        self.assertLess(abs(on_steps[0] - 267310), 20, on_steps)
+        self.assertLess(abs(on_steps[1] - 373250), 20, on_steps)
+
+        replay = self.tmp / "replay"
+        r = run(["replay", str(session), "--out", str(replay), "--quiet"])
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertEqual((replay / "timeseries.csv").read_bytes(), (session / "timeseries.csv").read_bytes())
+        self.assertEqual(json.loads((replay / "summary.json").read_text())["replay"]["commands_applied"], 40001)
+        self.assertIn("\n# family shev\n", (session / "inputs.log").read_text())
 
     def test_the_asc_log_reads_back_in_python_can_as_the_candump_log(self):
         """--bus-log-format asc: bus.asc beside bus.log, read by python-can's ASCReader: the same
@@ -501,7 +562,7 @@ class Lcm(BusTest):
         paper's PSecu2 (200 s of NEDC) and EvPm_bat (Sort1) equal the in-process runs byte for byte. (The CAN
         run of the same scenario equals its own reference, the one through the CAN codec: CAN
         quantises, LCM does not; the two differ by the quantisation, checked small here.)"""
-        for scenario, seconds in (("ev_nedc", 60), ("psecu2_nedc", 200), ("evpm_sort1", 150)):
+        for scenario, seconds in (("ev_nedc", 60), ("psecu2_nedc", 200), ("evpm_sort1", 150), ("shev_oo_sort1", 300)):
             sets = ["solver.duration_s=%d" % seconds]
             ref = self.plain_reference(scenario, sets, scenario + "_ref")
             plant, ecu = self.lcm_run(scenario, scenario, sets, "--lockstep")
@@ -709,14 +770,14 @@ class BadInput(BusTest):
         self.assertEqual(r.returncode, 2)
         self.assertIn("has no bus messages", r.stderr)
         self.no_folder(out)
-        # the series hybrid: its messages are not in the contract yet, for either command
-        r = run(["plant", "shev_oo_sort1", "--bus", "socketcand:127.0.0.1:%d" % port, "--out", str(out)])
-        self.assertEqual(r.returncode, 2)
-        self.assertIn("the series hybrid's messages are not in the bus contract yet", r.stderr)
-        self.no_folder(out)
-        r = run(["ecu", "shev_oo_sort1", "--bus", "socketcand:127.0.0.1:%d" % port])
+        # the series hybrid's plant with another family's binding
+        r = run(["plant", "shev_oo_sort1", "--bus", "socketcand:127.0.0.1:%d" % port, "--out", str(out),
+                 "--bus-map", str(SOURCE / "io" / "can" / "ehpt-ev.binding.toml")])
         self.assertEqual(r.returncode, 2, r.stderr)
-        self.assertIn("ECU has no messages in the bus contract yet", r.stderr)
+        self.assertIn("ehpt-ev.binding.toml:16: [[send]] EvSensors2: drivePowDel_W: `drivePowDel_W` is not an output "
+                      "of the shev plant; did you mean `drivePowDc_W`?", r.stderr)
+        self.assertIn("plant input `gensetPowRef_W` is neither bound to a signal nor given a value", r.stderr)
+        self.no_folder(out)
         # not a bus
         r = run(["plant", "ev_nedc", "--bus", "isotp:vcan0", "--out", str(out)])
         self.assertEqual(r.returncode, 1)

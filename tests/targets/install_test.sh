@@ -312,7 +312,7 @@ done
   fail "ehpt-dev has libraries outside /usr/lib/$multiarch"
 # the example ECUs, as in the source tree
 examples="$tmp/root/usr/share/doc/ehpt/examples"
-for pair in pycan_ecu.py:tools/pycan_ecu.py ehpt_dbc.py:tools/ehpt_dbc.py mbecu2_ecu.py:python/examples/mbecu2_ecu.py \
+for pair in pycan_ecu.py:tools/pycan_ecu.py ehpt_dbc.py:tools/ehpt_dbc.py mbecu2_ecu.py:python/examples/mbecu2_ecu.py shev_ems.py:python/examples/shev_ems.py \
             lcm_ecu.cpp:examples/lcm_ecu.cpp embed/CMakeLists.txt:examples/embed/CMakeLists.txt \
             embed/main.cpp:examples/embed/main.cpp README.md:packaging/examples-README.md \
             own_dbc/vcu.dbc:examples/own_dbc/vcu.dbc own_dbc/vcu.binding.toml:examples/own_dbc/vcu.binding.toml \
