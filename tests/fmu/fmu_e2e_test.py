@@ -383,6 +383,32 @@ with tempfile.TemporaryDirectory() as tmp:
         alone = subprocess.run([FMU_RUN, plant_fmu, "10", "12"], capture_output=True, text=True, timeout=300)
         check(alone.returncode == 0 and "fmi3Terminate Warning" in alone.stderr and "no ECU" in alone.stderr,
               "the plant FMU without its ECU: fmi3Terminate is a Warning that says no ECU: %s" % alone.stderr.strip()[-300:])
+    # the series hybrid's pair: plant and EMS as FMUs on ShevSensors/ShevCommand, through the genset's
+    # start at 267.31 s: every 0.1 s row equals `ehpt run` through the CAN codec
+    sdur = "solver.duration_s=300"
+    splant, secu = os.path.join(tmp, "shev_plant.fmu"), os.path.join(tmp, "shev_ecu.fmu")
+    r1 = ehpt("fmu", "shev_oo_sort1", "--bus", "ls-bus", "--set", sdur, "--out", splant)
+    r2 = ehpt("fmu", "shev_oo_sort1", "--bus", "ls-bus", "--role", "ecu", "--set", sdur, "--out", secu)
+    r3 = ehpt("run", "shev_oo_sort1", "--set", sdur, "--set", "vehicle.ecu.codec=can", "--quiet",
+              "--out", os.path.join(tmp, "shev_ref"))
+    check(r1.returncode == 0 and r2.returncode == 0 and r3.returncode == 0,
+          "the series hybrid's plant and EMS FMUs (%d, %d, %d) %s" % (r1.returncode, r2.returncode, r3.returncode,
+                                                                     (r1.stderr + r2.stderr + r3.stderr)[-300:]))
+    if r1.returncode == 0 and r2.returncode == 0 and r3.returncode == 0:
+        for fmu in (splant, secu):
+            problems = ls_bus_problems(fmu)
+            check(not problems, "%s: FMI 3.0 and FMI-LS-BUS complete %s" % (os.path.basename(fmu), problems))
+        got = subprocess.run([FMU_RUN, splant, "10", "300", secu], capture_output=True, text=True, timeout=300)
+        ref = open(os.path.join(tmp, "shev_ref", "timeseries.csv")).read().splitlines()
+        by_time = {line.split(",", 1)[0]: line for line in got.stdout.splitlines()[1:]}
+        rows = [by_time.get(line.split(",", 1)[0]) for line in ref[2:]]  # every 0.1 s after t = 0
+        same = sum(1 for a, b in zip(rows, ref[2:]) if a == b)
+        on = ref[0].split(",").index("genset_on")
+        check(got.returncode == 0 and got.stdout.splitlines()[0] == ref[0] and same == len(ref) - 2 == 3000 and
+              float(ref[-1].split(",")[on]) == 1.0,
+              "the series hybrid's plant FMU + EMS FMU: every row of ehpt run through the codec (%d of %d), the genset "
+              "on at the end %s" % (same, len(ref) - 2, got.stderr[-300:]))
+        check("30001 event modes, 60002 transfers" in got.stderr, "... every sample both ways: %s" % got.stderr[-200:])
     r = ehpt("fmu", "psecu2_nedc", "--bus", "ls-bus", "--fmi", "2", "--out", os.path.join(tmp, "two.fmu"))
     check(r.returncode == 2 and "FMI 3.0" in r.stderr and not os.path.exists(os.path.join(tmp, "two.fmu")),
           "--bus ls-bus --fmi 2: exit 2, why, nothing written (%d): %s" % (r.returncode, r.stderr.strip()))
