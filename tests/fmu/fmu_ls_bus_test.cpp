@@ -211,7 +211,8 @@ TEST_F(LsBus, ThePlantSendsTheContractsSensorFramesAsCanTransmitOperations) {
     unsigned id = 0;
     char name[128], sender[128];
     if (std::sscanf(l.c_str(), "BO_ %u %127[^:]: %*d %127s", &id, name, sender) == 3 && std::string(sender) == "Plant" &&
-        std::string(name).rfind("Ev", 0) != 0) {  // the hybrid's: PlantStatus and PsdSensors1..6
+        std::string(name).rfind("Ev", 0) != 0 && std::string(name).rfind("Shev", 0) != 0) {
+      // the power-split hybrid's: PlantStatus and PsdSensors1..6
       plant_ids.insert(id);
     }
   }

@@ -37,7 +37,8 @@ def tolerance(s):
 
 class DbcTest(unittest.TestCase):
     def test_contract_shape(self):
-        self.assertEqual(sorted(DBC.by_id), [272, 273, 288, 512, 528, 529, 530, 531, 532, 533, 544, 545, 546])
+        self.assertEqual(sorted(DBC.by_id), [272, 273, 288, 304, 512, 528, 529, 530, 531, 532, 533, 544, 545, 546,
+                                             560, 561, 562, 563])
         for m in DBC.by_id.values():
             self.assertEqual(m.length, 8, m.name)
             counter = [s for s in m.signals if s.name == "counter"]
@@ -48,7 +49,7 @@ class DbcTest(unittest.TestCase):
             want = [(44, 16, False, 1.0, 0.0, 65535.0)] if m.sender == "Ecu" else []
             self.assertEqual(echo, want, m.name)
         self.assertEqual(sorted(m.name for m in DBC.by_id.values() if m.sender == "Ecu"),
-                         ["EvCommand", "PsdCommand1", "PsdCommand2"])
+                         ["EvCommand", "PsdCommand1", "PsdCommand2", "ShevCommand"])
 
     def test_round_trip_every_signal(self):
         rng = random.Random(1)
