@@ -38,7 +38,23 @@ AxisIndex::AxisIndex(const std::vector<double>& x) : x_(x) {
 }
 
 Table1d::Table1d(std::vector<double> x, std::vector<double> y, Extrapolation extrapolation)
-    : x_(std::move(x)), y_(std::move(y)), extrapolation_(extrapolation), index_(x_) {}
+    : x_(std::move(x)), y_(std::move(y)), extrapolation_(extrapolation), index_(x_) {
+  if (extrapolation_ != Extrapolation::kPeriodic || x_.size() < 2) return;
+  span_ = x_.back() - x_.front();
+  if (!(span_ > 0.0) || !std::isfinite(span_)) return;  // validate() names it; fmod then
+  inv_span_ = 1.0 / span_;
+  // span = M 2^e with M odd: n span is exact while n M < 2^53. Periods up to 2^(53 - bits(M))
+  // - 2 (one spare for the estimate of n being one high) take the fast path.
+  int e = 0;
+  auto m = static_cast<std::uint64_t>(std::ldexp(std::frexp(span_, &e), 53));  // 53-bit significand
+  int bits = 53;
+  while ((m & 1u) == 0) {
+    m >>= 1;
+    --bits;
+  }
+  const int spare = std::min(53 - bits, 40);
+  if (spare >= 2) max_wrap_ = static_cast<double>((std::int64_t{1} << spare) - 2) * span_;
+}
 
 void validate(const Table1d& t, const std::string& field, bool allow_repeats, Problems& problems) {
   const auto& x = t.x();

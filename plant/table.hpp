@@ -93,22 +93,40 @@ class Table1d {
     switch (extrapolation_) {
       case Extrapolation::kHold:
         return u <= x_.front() ? y_.front() : y_.back();
-      case Extrapolation::kPeriodic: {
-        // period = the axis span; u = x_end starts the next period (the first row applies)
-        const double span = x_.back() - x_.front();
-        double k = std::fmod(u - x_.front(), span);
-        if (k < 0.0) k += span;
-        return inside(x_.front() + k);
-      }
+      case Extrapolation::kPeriodic:
+        return inside(x_.front() + wrapped(u - x_.front()));
       case Extrapolation::kLinear:
         break;
     }
     return inside(u);  // locate() keeps the end segment, its fraction runs past [0, 1]
   }
 
+  // The offset into the period, the bits of fmod (an exact operation): a - n span for the
+  // n that puts it in [0, span). Where every n span up to max_periods_ is an exact double (a
+  // span with few significant bits: 1180 s, 150 s), the remainder a - n span is exact too, so
+  // one multiplication and a check replace the fmod call (~90 instructions); otherwise, and
+  // for a < 0 or a NaN, fmod itself.
+  [[gnu::always_inline]] double wrapped(double a) const {
+    if (a >= 0.0 && a < max_wrap_) {
+      auto n = static_cast<std::int64_t>(a * inv_span_);
+      double r = a - static_cast<double>(n) * span_;
+      if (r < 0.0) {
+        r = a - static_cast<double>(--n) * span_;
+      } else if (r >= span_) {
+        r = a - static_cast<double>(++n) * span_;
+      }
+      if (r >= 0.0 && r < span_) return r;
+    }
+    double k = std::fmod(a, span_);
+    if (k < 0.0) k += span_;
+    return k;
+  }
+
   std::vector<double> x_, y_;
   Extrapolation extrapolation_ = Extrapolation::kLinear;
   AxisIndex index_;
+  double span_ = 0.0, inv_span_ = 0.0;  // periodic: the period and its inverse
+  double max_wrap_ = 0.0;               // periodic: below it, n span is exact for every n needed
 };
 
 // At least two rows, finite values, x non-decreasing (repeats allowed when

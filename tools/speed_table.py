@@ -39,7 +39,10 @@ def at(doc, path):
 
 
 def number(value, decimals):
-    """The value as shown in the table: fixed decimals, whole numbers without a point."""
+    """The value as shown in the table: fixed decimals, whole numbers without a point; "e2":
+    scientific with two decimals (errors of 1e-11)."""
+    if isinstance(decimals, str):
+        return f"{value:.{int(decimals[1:])}e}"
     if decimals == 0:
         return str(int(round(value)))
     return f"{value:.{decimals}f}"
@@ -71,6 +74,7 @@ def rows_of(bench):
 
     speed = bench.get("speed", {})
     reps = speed.get("repetitions")
+    add("the latency floor of an RK4 step: four dependent sqrt -> divide chains, ns", "speed.floor_ns_per_step", 1)
     for vehicle, solvers in speed.get("vehicles", {}).items():
         for solver, run in solvers.items():
             if not isinstance(run, dict) or run.get("status") != "ok":
@@ -80,6 +84,9 @@ def rows_of(bench):
             add(f"`{vehicle}` {solver}: ns per step (median of {reps} whole runs)", base + ".ns_per_step.median", 1,
                 f"<= {number(target, 0)}" if isinstance(target, (int, float)) else "", with_range=True)
             add(f"`{vehicle}` {solver}: times real time", base + ".realtime_factor", 0)
+            floor_target = run.get("target_floor_ratio")
+            add(f"`{vehicle}` {solver}: ns per step / the latency floor", base + ".floor_ratio", 2,
+                f"<= {floor_target:g}" if isinstance(floor_target, (int, float)) else "")
         ratio_target = solvers.get("target_implicit_euler_over_rk4")
         add(f"`{vehicle}`: implicit Euler / RK4, ns per step", f"speed.vehicles.{vehicle}.implicit_euler_over_rk4", 2,
             f"<= {ratio_target:g}" if isinstance(ratio_target, (int, float)) else "")
@@ -135,6 +142,9 @@ def rows_of(bench):
             base + ".rk4_wall_s.median", 3, with_range=True)
         add(f"`{scenario}`: CVODE (BDF, rtol {rtol_text(cv.get('rtol'))}), wall s (median)", base + ".cvode_wall_s.median", 3,
             with_range=True)
+        add(f"`{scenario}`: final SOC error of RK4 at 1 ms (against RK4 at {cv.get('fine_step_s', 0) * 1e3:g} ms)",
+            base + ".soc_error_rk4", "e1")
+        add(f"`{scenario}`: final SOC error of CVODE (the same yardstick)", base + ".soc_error_cvode", "e1")
         target = cv.get("target_wall_ratio")
         add(f"`{scenario}`: CVODE / RK4 wall time", base + ".wall_ratio", 1,
             f">= {target:g}" if isinstance(target, (int, float)) else "")

@@ -38,7 +38,8 @@ void leave_realtime(RealtimeSetup& setup);
 // Whether cpu is one this process may run on; else false and the allowed ones ("0-1").
 bool cpu_allowed(int cpu, std::string& allowed);
 
-// Peak resident set size of this process so far, bytes (getrusage).
+// Peak resident set size of this process so far, bytes (VmHWM of /proc/self/status: this
+// image's own, not the one it was exec'd from; getrusage where there is no /proc).
 std::int64_t peak_rss_bytes();
 
 }  // namespace ehpt::hil

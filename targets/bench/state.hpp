@@ -21,15 +21,20 @@ struct SpeedRun {
   Spread ns_per_step, wall_s;
   double realtime_factor = NAN;
   double target_ns = NAN;  // the issue's target, where it gives one
+  double target_floor_ratio = NAN;  // ns per step / the latency floor, where the issue gives a bound
 };
 
 // The speed row of psecu2 run as an ECU test (a fault, four expectations).
 inline constexpr const char* kTestRow = "psecu2_nedc + test";
 
+// RK4 at 1 ms and CVODE at kCvodeRtol, each against RK4 at kFineStep_s (its error is ~1e-4 of
+// RK4's at 1 ms): the accuracy of each side, next to its time.
+inline constexpr double kCvodeRtol = 1e-12;
+inline constexpr double kFineStep_s = 1e-4;
 struct CvodeRow {
   std::string scenario, error;
   double duration_s = 0.0;
-  ehpt::hil::RunFigures rk4, cv;
+  ehpt::hil::RunFigures rk4, cv, fine;
   Spread rk4_wall, cv_wall;
   ehpt::hil::ReferenceResult ref;
 };
@@ -74,6 +79,7 @@ struct Bench {
   bool any_failed = false;
 
   std::string speed_status = "not run";
+  double floor_ns_per_step = NAN;  // the latency floor of an RK4 step (section_speed.cpp), this run
   std::vector<SpeedRun> speed;
   std::string cvode_status = "not run";
   std::vector<CvodeRow> cvode;

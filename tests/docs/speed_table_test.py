@@ -42,7 +42,13 @@ def table_of(page_text):
 
 
 def shown_equal(text, value):
-    """text is value as the table shows it: the value rounded to the decimals of text."""
+    """text is value as the table shows it: the value rounded to the decimals of text (of its
+    mantissa, for 1.2e-11)."""
+    m = re.fullmatch(r"(-?\d+(?:\.(\d+))?)e([+-]\d+)", text)
+    if m:
+        scale = 10.0 ** int(m.group(3))
+        decimals = len(m.group(2) or "")
+        return abs(float(m.group(1)) * scale - value) <= 0.5 * 10 ** -decimals * scale * (1 + 1e-9)
     if not re.fullmatch(r"-?\d+(\.\d+)?", text):
         return False
     decimals = len(text.split(".")[1]) if "." in text else 0

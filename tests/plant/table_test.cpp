@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <random>
 
 namespace ehpt::plant {
@@ -95,6 +96,45 @@ TEST(Table1d, PeriodicRepeatsTheTableOverItsSpan) {
   EXPECT_EQ(t(-2.5), 5.0);   // before the start: the previous period
   const Table1d hold({0.0, 5.0, 10.0}, {0.0, 10.0, 2.0}, Extrapolation::kHold);
   EXPECT_EQ(hold(12.5), 2.0);
+}
+
+// The periodic wrap without fmod gives fmod's bits: for spans whose multiples are exact (a
+// cycle of 1180 s, 150 s, 1800.5 s) and spans whose are not (149.9 s, 0.1 s: fmod itself), at
+// random times up to 2e6 s, at exact multiples of the span and one ulp either side of them,
+// and at times before the start.
+TEST(Table1d, ThePeriodicWrapGivesTheBitsOfFmod) {
+  std::mt19937_64 rng(26);
+  int checked = 0;
+  for (const double x0 : {0.0, 3.0, 0.25}) {
+    for (const double span : {1180.0, 150.0, 1800.5, 149.9, 0.1, 1.0, 3600.0 * 24.0}) {
+      std::vector<double> x, y;
+      for (int i = 0; i <= 10; ++i) {
+        x.push_back(i == 10 ? x0 + span : x0 + span * i / 10.0);
+        y.push_back(std::sin(1.0 + i));
+      }
+      const Table1d periodic(x, y, Extrapolation::kPeriodic);
+      const Table1d hold(x, y, Extrapolation::kHold);
+      const auto reference = [&](double u) {  // what the table did with fmod
+        double k = std::fmod(u - x.front(), x.back() - x.front());
+        if (k < 0.0) k += x.back() - x.front();
+        return hold(x.front() + k);
+      };
+      std::vector<double> us;
+      std::uniform_real_distribution<double> any(x0, x0 + 2e6);
+      for (int i = 0; i < 2000; ++i) us.push_back(any(rng));
+      for (int n = 1; n < 200000; n = n * 3 + 1) {
+        const double at = x0 + n * (x.back() - x.front());
+        us.insert(us.end(), {at, std::nextafter(at, 0.0), std::nextafter(at, 1e300), at + 0.5 * span});
+      }
+      us.insert(us.end(), {x0 - 0.3 * span, x0 - 7.5 * span, x.back()});
+      for (const double u : us) {
+        const double a = periodic(u), b = reference(u);
+        ASSERT_EQ(std::memcmp(&a, &b, sizeof a), 0) << "span " << span << " x0 " << x0 << " u " << u;
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 40000);
 }
 
 }  // namespace ehpt::plant

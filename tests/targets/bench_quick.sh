@@ -128,6 +128,12 @@ for s in ("ev_nedc", "psecu2_nedc"):
     if s == "psecu2_nedc":
         check(abs(r["dfuel_pct"]) <= 0.1, "cvode %s: fuel differs by %g %%" % (s, r["dfuel_pct"]))
     check(positive(r["wall_ratio"]), "cvode %s: wall_ratio" % s)
+    # at equal accuracy: CVODE at rtol 1e-12, each side's error against RK4 at 0.1 ms printed; RK4 at
+    # 1 ms is within 1e-9 of that yardstick in SOC, and so is CVODE (tests/hil/cvode_reference_test.cpp)
+    check(cv["rtol"] == 1e-12 and cv["fine_step_s"] == 1e-4, "cvode: rtol %r, yardstick %r" % (cv["rtol"], cv["fine_step_s"]))
+    for side in ("rk4", "cvode"):
+        e = r["soc_error_" + side]
+        check(isinstance(e, (int, float)) and 0.0 <= e <= 1e-8, "cvode %s: SOC error of %s %r" % (s, side, e))
 
 # (g): the quick plan is 10^4 runs, every one valid; its time and memory as --plan printed them
 sp = b["sweep_plan"]
