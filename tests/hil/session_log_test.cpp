@@ -71,6 +71,54 @@ TEST(InputsLog, TheCommandsComeBackExactlyAndTheDigestIsTheFiles) {
   EXPECT_FALSE(again.next(step, wrong_family));  // an ev log gives no psd command
 }
 
+// The series hybrid's commands: written and read back exactly; a gensetON other than 0 or 1 and
+// a line with a field too few are refused with their line.
+TEST(InputsLog, TheSeriesHybridsCommandsComeBackAndItsOnOffFlagIsChecked) {
+  const std::string head = "# ehpt inputs log 1\n# scenario /x/shev.toml\n# family shev\n# pacing lockstep\n";
+  std::string text = head;
+  char line[256];
+  std::vector<msgs::ShevCommand> written;
+  for (int k = 0; k < 50; ++k) {
+    msgs::ShevCommand c;
+    c.stamp = msgs::Stamp{0.01 * k, 10 * k, static_cast<std::uint32_t>(k)};
+    c.driveTauRef_Nm = 1.0 / (k + 3) - 0.17;
+    c.gensetPowRef_W = k * 1234.5678;
+    c.gensetON = k % 3 == 0;
+    written.push_back(c);
+    text += std::string(line, static_cast<std::size_t>(hil::format_command(line, sizeof line, 10 * k, c))) + "\n";
+  }
+  const std::string path = temp_log("shev.log", text);
+  hil::InputsLog log;
+  std::vector<std::string> problems;
+  ASSERT_TRUE(hil::read_inputs_log(path, log, problems)) << problems.front();
+  EXPECT_EQ(log.family, "shev");
+  EXPECT_EQ(log.commands, 50);
+  hil::InputsLogReader reader(path, log);
+  std::int64_t step = -1;
+  msgs::ShevCommand c;
+  std::size_t k = 0;
+  for (; reader.next(step, c); ++k) {
+    ASSERT_LT(k, written.size());
+    EXPECT_EQ(step, static_cast<std::int64_t>(10 * k));
+    EXPECT_EQ(c.driveTauRef_Nm, written[k].driveTauRef_Nm);
+    EXPECT_EQ(c.gensetPowRef_W, written[k].gensetPowRef_W);
+    EXPECT_EQ(c.gensetON, written[k].gensetON) << k;
+    EXPECT_EQ(c.stamp.sequence, written[k].stamp.sequence);
+  }
+  EXPECT_EQ(k, written.size());
+  EXPECT_EQ(reader.error(), "");
+
+  for (const auto& [bad, why] : std::vector<std::pair<std::string, std::string>>{
+           {"shev 10 1 10 0.01 5 60000 2\n", ":5: gensetON must be 0 or 1"},
+           {"shev 10 1 10 0.01 5 60000\n", ":5: expected 8 fields"}}) {
+    hil::InputsLog bad_log;
+    problems.clear();
+    EXPECT_FALSE(hil::read_inputs_log(temp_log("bad_shev.log", head + bad), bad_log, problems)) << bad;
+    ASSERT_FALSE(problems.empty()) << bad;
+    EXPECT_NE(problems.front().find(why), std::string::npos) << problems.front();
+  }
+}
+
 TEST(InputsLog, ALogChangedAfterItsCheckIsAnErrorOfTheReplay) {
   const std::string good = std::string(kHead) + "ev 0 0 0 0 1.5\nev 10 1 10 0.01 2.5\n";
   const std::string path = temp_log("changing.log", good);
