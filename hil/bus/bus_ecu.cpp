@@ -42,7 +42,9 @@ class CanEcuWire {
   bool receive(OnSample&& on_sample) {
     bool heard = false;
     Frame buf[64];
-    while (const std::size_t k = bus_.receive(buf)) {
+    // until a receive comes back short: the transport had no more (Transport::receive)
+    for (std::size_t k = std::size(buf); k == std::size(buf);) {
+      k = bus_.receive(buf);
       for (std::size_t i = 0; i < k; ++i) {
         const Frame& f = buf[i];
         if (filter_.accept(f) != io::can::Reject::kNone) continue;
@@ -75,7 +77,9 @@ class CanEcuWire {
   std::int64_t send_command(const Command& c) {
     std::array<Frame, F::kCanCommandIds.size()> frames;
     const int saturated = io::can::encode(c, tx_, frames);
+    bus_.cork();  // the command's frames leave together (Transport::cork)
     for (const Frame& out : frames) bus_.send(out);
+    bus_.uncork();
     return saturated;
   }
 

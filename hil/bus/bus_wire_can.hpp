@@ -70,6 +70,7 @@ class CanWire {
         asc_(asc),
         asc_buf_(asc ? kLogFlushBytes : 1) {
     line_.reserve(96 + log_interface_.size());  // one candump (or ASC) line: never more
+    head_.reserve(32 + log_interface_.size());
     tx_.resize(binding_.send.size());
     for (std::size_t i = 0; i < tx_.size(); ++i) {  // unbound signals: their start values, once
       const io::can::DbcMessage& m = *binding_.send[i].message;
@@ -169,6 +170,7 @@ class CanWire {
       log_frames(std::span<const io::can::Frame>(&out, 1), false);
     };
     bool intact = true;
+    bus_.cork();  // the sample's frames leave together (Transport::cork), at the end
     if (!faults_.empty()) {  // error frames, then frames held from earlier samples that are due now
       faults_.error_frames(fault_mask_, [&](io::can::ErrorFrame kind) {
         if (bus_.send_error(kind)) log_error_frame(kind);
@@ -225,6 +227,7 @@ class CanWire {
         intact = false;
       }
     }
+    bus_.uncork();
     // the sample after a faulted one too: its first frame after a gap (or a counter put back)
     // may be refused by the ECU's counter rule, and then the ECU does not answer
     sample_intact_ = intact && previous_intact_;
@@ -260,7 +263,10 @@ class CanWire {
       faults_.release(BusFaults::Direction::kRx, now_step, take);
       faults_.release_held(BusFaults::Direction::kRx, fault_mask_, take);
     }
-    while (const std::size_t k = bus_.receive(buf)) {
+    // until a receive comes back short: the transport had no more (Transport::receive)
+    for (std::size_t k = std::size(buf); k == std::size(buf);) {
+      k = bus_.receive(buf);
+      if (k == 0) break;
       if (faults_.empty()) log_frames(std::span<const io::can::Frame>(buf, k), true);
       t_ns = per_sample_ ? clock_.now_ns() : 0;
       for (std::size_t i = 0; i < k; ++i) {
@@ -536,9 +542,15 @@ class CanWire {
   void log_frames(std::span<const io::can::Frame> frames, bool rx) {
     if (no_log_) return;
     const double t = wall_time_s();
+    // the head "(time) interface" once per microsecond: a sample's frames share it
+    if (const std::int64_t us = io::can::candump_time_us(t); us != head_us_) {
+      head_.clear();
+      io::can::append_candump_head(head_, t, log_interface_);
+      head_us_ = us;
+    }
     for (const auto& f : frames) {
-      line_.clear();
-      io::can::append_candump_line(line_, t, log_interface_, f);
+      line_.assign(head_);
+      io::can::append_candump_body(line_, f);
       log_buf_.append(line_);
       if (asc_) {
         line_.clear();
@@ -611,6 +623,8 @@ class CanWire {
   io::TextFileWriter log_;
   io::HandoffBuffer log_buf_;
   std::string line_;       // one candump line (reserved)
+  std::string head_;       // its head, "(time) interface" (reserved), at head_us_
+  std::int64_t head_us_ = -1;
   bool background_ = false;
   bool no_log_ = false;     // a run into memory: bus.log neither written nor formatted
   std::string log_error_;  // the first failed write of bus.log or bus.asc (or the bytes dropped)

@@ -13,25 +13,54 @@
 #include <limits>
 #include <optional>
 
+#include "io/number_format.hpp"
 #include "io/sha256.hpp"
 
 namespace ehpt::hil {
 
+namespace {
+
+// One command line: "FAMILY STEP SEQUENCE STAMP_STEP" and the values (each the shortest text
+// that reads back to its double: a replay gets the same bits), and the flag if the family has
+// one (-1: none). The length; -1 if the buffer could not hold the longest such line.
+int format_line(char* buf, std::size_t size, std::string_view family, std::int64_t step, const msgs::Stamp& stamp,
+                std::initializer_list<double> values, int flag) {
+  // family, three integers of at most 20 characters and 25 per value, with their spaces
+  if (size < family.size() + 3 * 21 + 25 * (values.size() + 1) + 3) return -1;
+  char* p = std::copy(family.begin(), family.end(), buf);
+  *p++ = ' ';
+  p = io::put_int(p, step);
+  *p++ = ' ';
+  p = io::put_uint(p, stamp.sequence);
+  *p++ = ' ';
+  p = io::put_int(p, stamp.step);
+  *p++ = ' ';
+  p = io::put_number(p, stamp.time_s);
+  for (const double v : values) {
+    *p++ = ' ';
+    p = io::put_number(p, v);
+  }
+  if (flag >= 0) {
+    *p++ = ' ';
+    *p++ = static_cast<char>('0' + flag);
+  }
+  *p = '\0';
+  return static_cast<int>(p - buf);
+}
+
+}  // namespace
+
 int format_command(char* buf, std::size_t size, std::int64_t step, const msgs::EvCommand& c) {
-  return std::snprintf(buf, size, "ev %lld %u %lld %.17g %.17g", static_cast<long long>(step), c.stamp.sequence,
-                       static_cast<long long>(c.stamp.step), c.stamp.time_s, c.driveTauRef_Nm);
+  return format_line(buf, size, "ev", step, c.stamp, {c.driveTauRef_Nm}, -1);
 }
 
 int format_command(char* buf, std::size_t size, std::int64_t step, const msgs::PsdCommand& c) {
-  return std::snprintf(buf, size, "psd %lld %u %lld %.17g %.17g %.17g %.17g %.17g %d", static_cast<long long>(step),
-                       c.stamp.sequence, static_cast<long long>(c.stamp.step), c.stamp.time_s, c.icePowRef_W,
-                       c.iceTauRef_Nm, c.genTauRef_Nm, c.motTauRef_Nm, c.iceON ? 1 : 0);
+  return format_line(buf, size, "psd", step, c.stamp, {c.icePowRef_W, c.iceTauRef_Nm, c.genTauRef_Nm, c.motTauRef_Nm},
+                     c.iceON ? 1 : 0);
 }
 
 int format_command(char* buf, std::size_t size, std::int64_t step, const msgs::ShevCommand& c) {
-  return std::snprintf(buf, size, "shev %lld %u %lld %.17g %.17g %.17g %d", static_cast<long long>(step),
-                       c.stamp.sequence, static_cast<long long>(c.stamp.step), c.stamp.time_s, c.driveTauRef_Nm,
-                       c.gensetPowRef_W, c.gensetON ? 1 : 0);
+  return format_line(buf, size, "shev", step, c.stamp, {c.driveTauRef_Nm, c.gensetPowRef_W}, c.gensetON ? 1 : 0);
 }
 
 std::string inputs_log_header(const std::string& scenario_path, const std::vector<std::string>& overrides,

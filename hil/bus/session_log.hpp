@@ -38,7 +38,8 @@ namespace ehpt::hil {
 
 inline constexpr const char* kInputsLogName = "inputs.log";
 
-// A command as one line (without the newline) into buf; returns its length. No allocation.
+// A command as one line (without the newline, NUL-terminated) into buf; returns its length, or
+// -1 if buf cannot hold the longest line of the family (320 bytes always can). No allocation.
 int format_command(char* buf, std::size_t size, std::int64_t step, const msgs::EvCommand& c);
 int format_command(char* buf, std::size_t size, std::int64_t step, const msgs::PsdCommand& c);
 int format_command(char* buf, std::size_t size, std::int64_t step, const msgs::ShevCommand& c);

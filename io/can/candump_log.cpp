@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "io/can/candump_log.hpp"
 
+#include "io/number_format.hpp"
+
 #include <cmath>
 #include <cstdio>
 
@@ -11,46 +13,56 @@ namespace {
 // "(seconds.micros) interface": seconds and microseconds as integers, the same text for the
 // same time on every machine
 void append_head(std::string& out, double time_s, std::string_view interface_name) {
-  const double t = std::isfinite(time_s) && time_s >= 0.0 ? time_s : 0.0;
-  auto us = static_cast<long long>(std::llround(t * 1e6));
-  char head[48];
-  const int n = std::snprintf(head, sizeof head, "(%lld.%06lld) ", us / 1000000, us % 1000000);
-  out.append(head, static_cast<std::size_t>(n));
+  char head[32];
+  char* p = head;
+  *p++ = '(';
+  p = io::put_seconds_us(p, candump_time_us(time_s));
+  *p++ = ')';
+  *p++ = ' ';
+  out.append(head, p);
   out.append(interface_name);
 }
 
-// " ID#" (id_text already formatted), then the bytes in hex, then a newline
-void append_body(std::string& out, const char* id_text, const std::uint8_t* data, int len) {
-  static const char kHex[] = "0123456789ABCDEF";
+// " ID#" (the id in hex, digits digits at least), then the bytes in hex, then a newline
+void append_body(std::string& out, std::uint32_t id, int digits, const std::uint8_t* data, int len) {
   char body[32];
-  int m = std::snprintf(body, sizeof body, " %s#", id_text);
-  for (int i = 0; i < len && i < 8; ++i) {
-    body[m++] = kHex[data[i] >> 4];
-    body[m++] = kHex[data[i] & 0x0F];
-  }
-  body[m++] = '\n';
-  out.append(body, static_cast<std::size_t>(m));
+  char* p = body;
+  *p++ = ' ';
+  p = io::put_hex(p, id, digits);
+  *p++ = '#';
+  for (int i = 0; i < len && i < 8; ++i) p = io::put_hex(p, data[i], 2);
+  *p++ = '\n';
+  out.append(body, p);
 }
 
 }  // namespace
 
+std::int64_t candump_time_us(double time_s) {
+  const double t = std::isfinite(time_s) && time_s >= 0.0 && time_s < 9e12 ? time_s : 0.0;  // 9e12 s: us fit
+  return static_cast<std::int64_t>(std::llround(t * 1e6));
+}
+
+void append_candump_head(std::string& out, double time_s, std::string_view interface_name) {
+  append_head(out, time_s, interface_name);
+}
+
+void append_candump_body(std::string& out, const Frame& f) {
+  if (f.extended) {
+    append_body(out, f.id & kMaxExtendedId, 8, f.data.data(), f.len);
+  } else {
+    append_body(out, f.id & kMaxStandardId, 3, f.data.data(), f.len);
+  }
+}
+
 void append_candump_line(std::string& out, double time_s, std::string_view interface_name, const Frame& f) {
   append_head(out, time_s, interface_name);
-  char id[12];
-  if (f.extended) {
-    std::snprintf(id, sizeof id, "%08X", static_cast<unsigned>(f.id & kMaxExtendedId));
-  } else {
-    std::snprintf(id, sizeof id, "%03X", static_cast<unsigned>(f.id & kMaxStandardId));
-  }
-  append_body(out, id, f.data.data(), f.len);
+  append_candump_body(out, f);
 }
 
 void append_candump_error_line(std::string& out, double time_s, std::string_view interface_name,
                                std::uint32_t can_id_with_flag, const std::array<std::uint8_t, 8>& data) {
   append_head(out, time_s, interface_name);
-  char id[12];
-  std::snprintf(id, sizeof id, "%08X", static_cast<unsigned>(can_id_with_flag));
-  append_body(out, id, data.data(), 8);
+  append_body(out, can_id_with_flag, 8, data.data(), 8);
 }
 
 bool parse_candump_line(std::string_view line, CandumpLine& out, const char*& why) {

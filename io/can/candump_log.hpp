@@ -22,6 +22,11 @@ constexpr int hex_digit_value(char c) {
 
 // Appends one line (with '\n'). Allocates only if `out` lacks the capacity (reserve it).
 void append_candump_line(std::string& out, double time_s, std::string_view interface_name, const Frame& f);
+// The same line in two parts, for a writer that puts several frames under one time stamp:
+// "(S.UUUUUU) IFACE", then " ID#DATA\n". The time in microseconds the head shows.
+std::int64_t candump_time_us(double time_s);
+void append_candump_head(std::string& out, double time_s, std::string_view interface_name);
+void append_candump_body(std::string& out, const Frame& f);
 // An error frame in the same format (as candump -L writes one): the id with CAN_ERR_FLAG
 // (0x20000000) and the error class bits, 8 hex digits, then its 8 data bytes.
 void append_candump_error_line(std::string& out, double time_s, std::string_view interface_name,

@@ -2,6 +2,7 @@
 #include "io/can/dbc.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <charconv>
 #include <cmath>
 #include <cstring>
@@ -916,7 +917,60 @@ bool signal_fits(const DbcSignal& s, int payload_bytes) {
   return msb_byte + more_bytes < payload_bytes;
 }
 
+namespace {
+
+// The signal's bits as one shift of the payload read as a 64-bit word (the codec's hot path:
+// a bit at a time was 9 000 instructions per PSecu2 sample). Intel: the payload little-endian,
+// the signal from start_bit up. Motorola: the payload big-endian (byte 0's bit 7 first), the
+// signal from its most significant bit, which the DBC numbers start_bit (byte start_bit / 8,
+// bit start_bit % 8), so at big-endian index 8 (start_bit / 8) + 7 - start_bit % 8. shift is
+// the signal's lowest bit in the word; false (the bit loops below) if the signal does not lie
+// within the payload's first 8 bytes.
+bool word_shift(const DbcSignal& s, std::size_t payload_bytes, int& shift) {
+  if (s.length < 1 || s.length > 64 || s.start_bit < 0 || payload_bytes > 8) return false;
+  const int bits = static_cast<int>(payload_bytes) * 8;
+  if (s.byte_order == ByteOrder::kIntel) {
+    if (s.start_bit + s.length > bits) return false;
+    shift = s.start_bit;
+  } else {
+    const int msb = 8 * (s.start_bit / 8) + 7 - s.start_bit % 8;
+    if (msb + s.length > bits) return false;
+    shift = 64 - msb - s.length;
+  }
+  return true;
+}
+// Byte i at bits 8i up (little-endian: one load on such a host), or at bits 56 - 8i down.
+std::uint64_t load_word(const DbcSignal& s, std::span<const std::uint8_t> payload) {
+  std::uint64_t w = 0;
+  if constexpr (std::endian::native == std::endian::little) {
+    std::memcpy(&w, payload.data(), payload.size());
+    return s.byte_order == ByteOrder::kIntel ? w : __builtin_bswap64(w);
+  }
+  if (s.byte_order == ByteOrder::kIntel) {
+    for (std::size_t i = payload.size(); i-- > 0;) w = (w << 8) | payload[i];
+  } else {
+    for (std::size_t i = 0; i < 8; ++i) w = (w << 8) | (i < payload.size() ? payload[i] : 0u);
+  }
+  return w;
+}
+void store_word(const DbcSignal& s, std::uint64_t w, std::span<std::uint8_t> payload) {
+  if constexpr (std::endian::native == std::endian::little) {
+    if (s.byte_order != ByteOrder::kIntel) w = __builtin_bswap64(w);
+    std::memcpy(payload.data(), &w, payload.size());
+    return;
+  }
+  if (s.byte_order == ByteOrder::kIntel) {
+    for (std::size_t i = 0; i < payload.size(); ++i, w >>= 8) payload[i] = static_cast<std::uint8_t>(w);
+  } else {
+    for (std::size_t i = 0; i < payload.size(); ++i) payload[i] = static_cast<std::uint8_t>(w >> (56 - 8 * i));
+  }
+}
+
+}  // namespace
+
 std::uint64_t extract_raw(const DbcSignal& s, std::span<const std::uint8_t> payload) {
+  int shift = 0;
+  if (word_shift(s, payload.size(), shift)) return (load_word(s, payload) >> shift) & raw_mask(s.length);
   std::uint64_t raw = 0;
   int pos = s.start_bit;
   if (s.byte_order == ByteOrder::kIntel) {
@@ -934,6 +988,12 @@ std::uint64_t extract_raw(const DbcSignal& s, std::span<const std::uint8_t> payl
 
 void insert_raw(const DbcSignal& s, std::uint64_t raw, std::span<std::uint8_t> payload) {
   raw &= raw_mask(s.length);
+  int shift = 0;
+  if (word_shift(s, payload.size(), shift)) {
+    const std::uint64_t mask = raw_mask(s.length) << shift;
+    store_word(s, (load_word(s, payload) & ~mask) | (raw << shift), payload);
+    return;
+  }
   const auto put = [&](int pos, std::uint64_t bit) {
     std::uint8_t& byte = payload[static_cast<std::size_t>(pos >> 3)];
     byte = static_cast<std::uint8_t>((byte & ~(1u << (pos & 7))) | (static_cast<unsigned>(bit) << (pos & 7)));

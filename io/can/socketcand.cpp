@@ -2,6 +2,7 @@
 #include "io/can/socketcand.hpp"
 
 #include "io/can/candump_log.hpp"
+#include "io/number_format.hpp"
 
 #include <arpa/inet.h>
 #include <fcntl.h>
@@ -66,31 +67,49 @@ std::string_view next_token(std::string_view& s) {
 // " < frame 123 1.000000 1122334455667788 >" into buf; returns its length. The leading space
 // separates messages: python-can 4.1 drops the character after the last message of each
 // read (a frame lost at every read boundary without it), and warns about a trailing one.
-std::size_t format_frame(char* buf, std::size_t size, const Frame& f, double time_s) {
-  const auto us = static_cast<long long>(time_s * 1e6);
-  int n = f.extended ? std::snprintf(buf, size, " < frame %08X %lld.%06lld ", static_cast<unsigned>(f.id & kMaxExtendedId),
-                                     us / 1000000, us % 1000000)
-                     : std::snprintf(buf, size, " < frame %03X %lld.%06lld ", static_cast<unsigned>(f.id & kMaxStandardId),
-                                     us / 1000000, us % 1000000);
-  static const char kHex[] = "0123456789ABCDEF";
-  for (int i = 0; i < f.len && i < 8; ++i) {
-    buf[n++] = kHex[f.data[static_cast<std::size_t>(i)] >> 4];
-    buf[n++] = kHex[f.data[static_cast<std::size_t>(i)] & 0x0F];
+// The longest: " < frame 1FFFFFFF " + 20 digits of seconds + ".UUUUUU " + 16 hex digits + " >".
+constexpr std::size_t kMaxFrameText = 80;
+// A frame's time as "S.UUUUUU", formatted once per microsecond (a sample's frames share it).
+struct TimeText {
+  std::int64_t us = -1;
+  char text[24] = {};
+  std::size_t len = 0;
+  std::string_view at(double time_s) {
+    const auto u = static_cast<std::int64_t>(time_s * 1e6);
+    if (u != us) {
+      us = u;
+      len = static_cast<std::size_t>(io::put_seconds_us(text, u) - text);
+    }
+    return {text, len};
   }
-  if (f.len > 0) buf[n++] = ' ';
-  buf[n++] = '>';
-  return static_cast<std::size_t>(n);
+};
+std::size_t format_frame(char (&buf)[kMaxFrameText], const Frame& f, std::string_view time_text) {
+  static constexpr std::string_view kHead = " < frame ";
+  char* p = std::copy(kHead.begin(), kHead.end(), buf);
+  p = f.extended ? io::put_hex(p, f.id & kMaxExtendedId, 8) : io::put_hex(p, f.id & kMaxStandardId, 3);
+  *p++ = ' ';
+  p = std::copy(time_text.begin(), time_text.end(), p);
+  *p++ = ' ';
+  for (int i = 0; i < f.len && i < 8; ++i) p = io::put_hex(p, f.data[static_cast<std::size_t>(i)], 2);
+  if (f.len > 0) *p++ = ' ';
+  *p++ = '>';
+  return static_cast<std::size_t>(p - buf);
 }
 
-// "< send 123 8 11 22 33 44 55 66 77 88 >"
-std::size_t format_send(char* buf, std::size_t size, const Frame& f) {
-  int n = f.extended ? std::snprintf(buf, size, "< send %08X %X", static_cast<unsigned>(f.id & kMaxExtendedId), f.len)
-                     : std::snprintf(buf, size, "< send %03X %X", static_cast<unsigned>(f.id & kMaxStandardId), f.len);
+// "< send 123 8 11 22 33 44 55 66 77 88 > "
+std::size_t format_send(char (&buf)[kMaxFrameText], const Frame& f) {
+  static constexpr std::string_view kHead = "< send ";
+  char* p = std::copy(kHead.begin(), kHead.end(), buf);
+  p = f.extended ? io::put_hex(p, f.id & kMaxExtendedId, 8) : io::put_hex(p, f.id & kMaxStandardId, 3);
+  *p++ = ' ';
+  p = io::put_hex(p, f.len, 1);
   for (int i = 0; i < f.len && i < 8; ++i) {
-    n += std::snprintf(buf + n, size - static_cast<std::size_t>(n), " %02X", f.data[static_cast<std::size_t>(i)]);
+    *p++ = ' ';
+    p = io::put_hex(p, f.data[static_cast<std::size_t>(i)], 2);
   }
-  n += std::snprintf(buf + n, size - static_cast<std::size_t>(n), " > ");
-  return static_cast<std::size_t>(n);
+  static constexpr std::string_view kTail = " > ";
+  p = std::copy(kTail.begin(), kTail.end(), p);
+  return static_cast<std::size_t>(p - buf);
 }
 
 void set_nodelay(int fd) {
@@ -113,6 +132,7 @@ struct Stream {
   int fd = -1;
   std::vector<char> in, out;
   std::size_t in_len = 0, out_len = 0;
+  bool quickack = false;  // ACK every read at once (set_quickack): the peer may have Nagle on
 
   void reset(int new_fd) {
     fd = new_fd;
@@ -194,14 +214,18 @@ struct Stream {
     out_len -= done;
     return true;
   }
-  // Reads what is there; false if the peer closed or the connection failed.
+  // Reads what is there; false if the peer closed or the connection failed. A read that
+  // leaves room in the buffer took all the socket had: no second recv() to hear EAGAIN (what
+  // comes after it wakes the next wait()).
   bool read_some() {
     for (;;) {
       if (in_len == in.size()) return true;  // full: the caller takes messages out first
-      const ssize_t n = ::recv(fd, in.data() + in_len, in.size() - in_len, MSG_DONTWAIT);
+      const std::size_t room = in.size() - in_len;
+      const ssize_t n = ::recv(fd, in.data() + in_len, room, MSG_DONTWAIT);
       if (n > 0) {
         in_len += static_cast<std::size_t>(n);
-        set_quickack(fd);
+        if (quickack) set_quickack(fd);
+        if (static_cast<std::size_t>(n) < room) return true;
         continue;
       }
       if (n == 0) return false;
@@ -330,6 +354,9 @@ constexpr std::int64_t kIdleEvictNs = 5'000'000'000;
 // the frames one client may hold in the plant's ring (FrameRing::share(), 256): a client
 // flooding the bus must not keep the ECU's frames out (200 000 unknown-id frames from one
 // client made lockstep waits time out); each pump starts with the next client
+// a loop that never calls wait() (the wall clock drains at every step) still takes a new
+// connection within this
+constexpr std::int64_t kAcceptEveryNs = 10'000'000;
 
 class Server final : public Transport {
  public:
@@ -347,22 +374,24 @@ class Server final : public Transport {
     close_in_order(open);
   }
 
-  // Queues the frame for every live client and writes what it can without waiting. It reads
-  // nothing and accepts no one: receive() and wait() do that, once per call, not per frame
-  // (a sample is seven frames).
+  // Queues the frame for every live client and, unless corked, writes what it can without
+  // waiting. It reads nothing and accepts no one: receive() and wait() do that, once per call,
+  // not per frame (a sample is four to seven frames).
   bool send(const Frame& f) override {
-    char buf[96];
-    const std::size_t n = format_frame(buf, sizeof buf, f, wall_time_s());
+    char buf[kMaxFrameText];
+    const std::size_t n = format_frame(buf, f, time_text_.at(wall_time_s()));
     const std::int64_t now = now_ns();
     bool sent = false;
     for (auto& c : clients_) {
       if (!live(c, now)) continue;
-      if (c.stream.queue(buf, n)) {
+      // corked with a full buffer: what is queued goes out first (a slow client's buffer
+      // stays full, and it loses this frame as it would have uncorked)
+      if (c.stream.queue(buf, n) || (corked_ && c.stream.flush() && c.stream.queue(buf, n))) {
         sent = true;
       } else {
         ++counters_.slow_drops;  // this client is too slow: its buffer is full (the others got it)
       }
-      if (!c.stream.flush()) drop(c);
+      if (!corked_ && !c.stream.flush()) drop(c);
     }
     if (sent) {
       ++counters_.frames_out;
@@ -370,6 +399,15 @@ class Server final : public Transport {
       ++counters_.send_dropped;
     }
     return sent;
+  }
+  // A sample's frames as one write per client (TCP_NODELAY: one segment, one wake-up of the
+  // ECU instead of one per frame).
+  void cork() override { corked_ = true; }
+  void uncork() override {
+    corked_ = false;
+    for (auto& c : clients_) {
+      if (c.stream.fd >= 0 && c.stream.out_len > 0 && !c.stream.flush()) drop(c);
+    }
   }
 
   std::size_t receive(std::span<Frame> out) override {
@@ -388,6 +426,7 @@ class Server final : public Transport {
     const int ms = timeout_ns <= 0 ? 0 : static_cast<int>(std::min<std::int64_t>((timeout_ns + 999'999) / 1'000'000, 60'000));
     // a client settling: wake when it goes live
     const int rc = ::poll(fds.data(), n, ms);
+    if (rc > 0 && (fds[0].revents & POLLIN) != 0) accept_due_ = true;
     return rc > 0;
   }
 
@@ -421,30 +460,10 @@ class Server final : public Transport {
 
   // All non-blocking I/O: new clients, their messages, pending output.
   void pump() {
-    for (;;) {
-      const int fd = ::accept4(listen_fd_, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
-      if (fd < 0) break;
-      Client* slot = nullptr;
-      for (auto& c : clients_) {
-        if (c.state == State::kFree) {
-          slot = &c;
-          break;
-        }
-      }
-      if (slot == nullptr) slot = evict_idle_listener(now_ns());
-      if (slot == nullptr) {  // full: refuse politely (a refused connection, not a malformed frame)
-        ::close(fd);
-        ++counters_.peers_refused;
-        continue;
-      }
-      set_nodelay(fd);
-      slot->stream.fd = fd;
-      slot->stream.in_len = slot->stream.out_len = 0;
-      slot->state = State::kHello;
-      slot->accepted_ns = now_ns();
-      if (!slot->stream.reply("< hi >")) drop(*slot);
-    }
     const std::int64_t now = now_ns();
+    // new connections: when the last wait() saw one, else at most every kAcceptEveryNs (a
+    // loop that never waits); not an accept4() per call, which a lockstep period makes a few of
+    if (accept_due_ || now >= next_accept_ns_) accept_new();
     // every client in turn, starting one further each pump, each up to its share of the ring
     const std::size_t first = next_first_;
     next_first_ = (next_first_ + 1) % kMaxClients;
@@ -469,7 +488,36 @@ class Server final : public Transport {
       }
       if (c.state == State::kFree) continue;
       c.stream.drop_consumed(consumed, counters_.rx_malformed, ring_.full_for(source));
-      if (!open || !c.stream.flush()) drop(c);
+      if (!open || (c.stream.out_len > 0 && !c.stream.flush())) drop(c);
+    }
+  }
+
+  void accept_new() {
+    accept_due_ = false;
+    next_accept_ns_ = now_ns() + kAcceptEveryNs;
+    for (;;) {
+      const int fd = ::accept4(listen_fd_, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
+      if (fd < 0) break;
+      Client* slot = nullptr;
+      for (auto& c : clients_) {
+        if (c.state == State::kFree) {
+          slot = &c;
+          break;
+        }
+      }
+      if (slot == nullptr) slot = evict_idle_listener(now_ns());
+      if (slot == nullptr) {  // full: refuse politely (a refused connection, not a malformed frame)
+        ::close(fd);
+        ++counters_.peers_refused;
+        continue;
+      }
+      set_nodelay(fd);
+      slot->stream.fd = fd;
+      slot->stream.quickack = true;  // its client may have Nagle on (python-can's does)
+      slot->stream.in_len = slot->stream.out_len = 0;
+      slot->state = State::kHello;
+      slot->accepted_ns = now_ns();
+      if (!slot->stream.reply("< hi >")) drop(*slot);
     }
   }
 
@@ -540,8 +588,8 @@ class Server final : public Transport {
 
   // a bus: the other clients hear what one sends
   void forward(const Client& from, const Frame& f, std::int64_t now) {
-    char buf[96];
-    const std::size_t n = format_frame(buf, sizeof buf, f, wall_time_s());
+    char buf[kMaxFrameText];
+    const std::size_t n = format_frame(buf, f, time_text_.at(wall_time_s()));
     for (auto& c : clients_) {
       if (&c == &from || !live(c, now)) continue;
       if (!c.stream.queue(buf, n)) ++counters_.slow_drops;
@@ -552,13 +600,20 @@ class Server final : public Transport {
   std::string name_;
   std::array<Client, kMaxClients> clients_;
   std::size_t next_first_ = 0;  // the client pump() reads first (round robin)
+  bool corked_ = false;          // send() queues only; uncork() writes
+  TimeText time_text_;
+  bool accept_due_ = true;       // the listening socket was readable at the last wait()
+  std::int64_t next_accept_ns_ = 0;
   FrameRing ring_;
   TransportCounters counters_;
 };
 
 class Client final : public Transport {
  public:
-  Client(int fd, std::string name) : name_(std::move(name)) { stream_.reset(fd); }
+  Client(int fd, std::string name) : name_(std::move(name)) {
+    stream_.reset(fd);
+    stream_.quickack = true;  // a socketcand daemon, or any server, may have Nagle on too
+  }
   ~Client() override {
     std::vector<Stream*> one{&stream_};
     close_in_order(one);
@@ -611,15 +666,21 @@ class Client final : public Transport {
       ++counters_.send_dropped;
       return false;
     }
-    char buf[96];
-    const std::size_t n = format_send(buf, sizeof buf, f);
-    if (!stream_.queue(buf, n)) {
+    char buf[kMaxFrameText];
+    const std::size_t n = format_send(buf, f);
+    if (!stream_.queue(buf, n) && !(corked_ && stream_.flush() && stream_.queue(buf, n))) {
       ++counters_.send_dropped;
       return false;
     }
-    if (!stream_.flush()) lose();
+    if (!corked_ && !stream_.flush()) lose();
     ++counters_.frames_out;
     return true;
+  }
+  // A command's frames as one write (one segment: the plant wakes once for them).
+  void cork() override { corked_ = true; }
+  void uncork() override {
+    corked_ = false;
+    if (connected_ && stream_.out_len > 0 && !stream_.flush()) lose();
   }
 
   std::size_t receive(std::span<Frame> out) override {
@@ -643,7 +704,7 @@ class Client final : public Transport {
         }
       }
       stream_.drop_consumed(consumed, counters_.rx_malformed, ring_.full());
-      if (!open || !stream_.flush()) lose();
+      if (!open || (stream_.out_len > 0 && !stream_.flush())) lose();
     }
     return ring_.pop(out);
   }
@@ -665,6 +726,7 @@ class Client final : public Transport {
   }
   Stream stream_;
   bool connected_ = false;
+  bool corked_ = false;   // send() queues only; uncork() writes
   bool refused_ = false;  // the handshake ended before "< hi >"
   std::string name_;
   FrameRing ring_;

@@ -38,7 +38,15 @@ class Transport {
   virtual ~Transport() = default;
   // Queues one frame for sending; false (counted in send_dropped) if it cannot go now.
   virtual bool send(const Frame& frame) = 0;
-  // Up to out.size() received frames (0: none now). Never blocks.
+  // The frames sent between cork() and uncork() leave together at uncork(), in one write per
+  // peer where the transport has a stream (socketcand: a sample's frames are one TCP segment,
+  // not one each, and the peer wakes once); outside, each send() writes at once. Transports
+  // with one message per frame (SocketCAN, the in-process bus) send at once either way.
+  virtual void cork() {}
+  virtual void uncork() {}
+  // Up to out.size() received frames (0: none now). Never blocks. Fewer than out.size(): the
+  // transport had no more at the call (what comes later wakes wait()), so a caller drains
+  // with one call, not one more that finds nothing.
   virtual std::size_t receive(std::span<Frame> out) = 0;
   // Waits up to timeout_ns for something to receive (or a peer to arrive); true if there may
   // be. The only call that may block, and only as long as asked.

@@ -3,6 +3,7 @@
 // never finish their handshake cannot lock an ECU out; their slots are freed after 5 s; the
 // session ends with an orderly close.
 #include <arpa/inet.h>
+#include <linux/tcp.h>  // struct tcp_info with tcpi_data_segs_in (netinet/tcp.h's lacks it)
 #include <netinet/in.h>
 #include <sys/socket.h>
 #include <unistd.h>
@@ -139,6 +140,9 @@ int raw_client(Transport& server, std::uint16_t port) {
   const auto pump_until = [&](const std::string& want) {
     std::string got;
     for (int i = 0; i < 200 && got.find(want) == std::string::npos; ++i) {
+      // as the plant's loops drive it: wait() sees a new connection, receive() accepts it (a
+      // receive() alone accepts at most every 10 ms: not an accept4() per call)
+      server.wait(0);
       server.receive(none);
       got += read_until(fd, want);
     }
@@ -152,6 +156,48 @@ int raw_client(Transport& server, std::uint16_t port) {
   ::send(fd, raw.data(), raw.size(), 0);
   EXPECT_NE(pump_until("< ok >").find("< ok >"), std::string::npos);
   return fd;
+}
+
+// Data segments that have come in on a socket (TCP_INFO).
+std::uint32_t data_segments_in(int fd) {
+  tcp_info info{};
+  socklen_t len = sizeof info;
+  if (::getsockopt(fd, IPPROTO_TCP, TCP_INFO, &info, &len) != 0) return 0;
+  return info.tcpi_data_segs_in;
+}
+
+// Between cork() and uncork() a sample's frames are queued and leave in one write: one TCP
+// segment for the client (the ECU wakes once per sample), the same text as frame by frame.
+// Uncorked, each frame is its own segment, which shows the count tells the two apart.
+TEST(SocketcandServer, ASampleSentCorkedLeavesInOneSegment) {
+  const std::uint16_t port = free_port();
+  std::string error;
+  auto server = open_socketcand_server("127.0.0.1", port, error);
+  ASSERT_TRUE(server) << error;
+  const int fd = raw_client(*server, port);
+  for (int i = 0; i < 100 && !server->has_peer(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  ASSERT_TRUE(server->has_peer());  // live once its "< ok >" has settled
+  const auto frame = [](std::uint32_t id) {
+    Frame f;
+    f.id = id;
+    f.len = 2;
+    f.data[0] = static_cast<std::uint8_t>(id);
+    f.data[1] = 0xAB;
+    return f;
+  };
+  for (const bool corked : {true, false}) {
+    const std::uint32_t before = data_segments_in(fd);
+    if (corked) server->cork();
+    for (std::uint32_t id = 0x201; id <= 0x204; ++id) EXPECT_TRUE(server->send(frame(id)));
+    if (corked) server->uncork();
+    const std::string text = read_until(fd, "< frame 204 ");
+    const std::size_t a = text.find("< frame 201 "), b = text.find("< frame 202 "), c = text.find("< frame 203 "),
+                      d = text.find("< frame 204 ");
+    EXPECT_TRUE(a != std::string::npos && a < b && b < c && c < d && d != std::string::npos) << text;
+    EXPECT_NE(text.find(" 01AB >"), std::string::npos) << text;
+    EXPECT_EQ(data_segments_in(fd) - before, corked ? 1u : 4u) << (corked ? "corked" : "uncorked");
+  }
+  ::close(fd);
 }
 
 // One client flooding the bus (unknown ids, as fast as it can) cannot keep another's frame
