@@ -113,12 +113,23 @@ def rows_of(bench):
             f"<= {target:g}" if isinstance(target, (int, float)) else "")
 
     runs = bench.get("runs", {})
+    for kind, label in (("tcp", "TCP"), ("udp", "UDP")):
+        if at(bench, f"exchange_floors.{kind}.status") == "ok":
+            add(f"the exchange's floor: a {label} ping-pong of two processes on 127.0.0.1, round trips per second",
+                f"exchange_floors.{kind}.round_trips_per_s", 0)
     for name, label in (("lockstep_socketcand", "lockstep over socketcand, `ehpt ecu` (ev_sort1)"),
+                        ("lockstep_socketcand_psecu2", "lockstep over socketcand, `ehpt ecu` (psecu2_nedc)"),
+                        ("lockstep_lcm", "lockstep over LCM udpm, `ehpt ecu` (ev_sort1)"),
+                        ("lockstep_lcm_psecu2", "lockstep over LCM udpm, `ehpt ecu` (psecu2_nedc)"),
                         ("lockstep_pycan", "lockstep over socketcand, `tools/pycan_ecu.py` (python-can 4.1, psecu2_nedc)")):
         if at(runs, name + ".status") != "ok":
             continue
-        add(f"{label}: samples per second", f"runs.{name}.samples_per_s", 0,
+        add(f"{label}: periods per second", f"runs.{name}.samples_per_s", 0,
             ">= 2000" if name == "lockstep_pycan" else "")
+        target = at(runs, name + ".target_floor_ratio")
+        if at(runs, name + ".floor_ratio") is not None:
+            add(f"{label}: periods per second / the floor's round trips", f"runs.{name}.floor_ratio", 2,
+                f">= {target:g}" if isinstance(target, (int, float)) else "")
         add(f"{label}: round trip p50, us", f"runs.{name}.round_trip_p50_us", 0)
         add(f"{label}: round trip p99, us", f"runs.{name}.round_trip_p99_us", 0)
     if at(runs, "wallclock_pycan.status") == "ok":

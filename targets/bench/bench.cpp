@@ -13,6 +13,7 @@
 //   realtime                  ehpt run ev_sort1 --realtime (section c), S seconds
 //   lockstep_socketcand       ehpt plant --lockstep + ehpt ecu over socketcand on 127.0.0.1
 //   lockstep_lcm              the same over LCM udpm in a private network namespace
+//   lockstep_socketcand_psecu2, lockstep_lcm_psecu2   the same two with PSecu2 (psecu2_nedc)
 //   wallclock_socketcand      ehpt plant (wall clock) + ehpt ecu over socketcand
 //   lockstep_pycan            ehpt plant --lockstep + tools/pycan_ecu.py (python-can), PSecu2
 //   wallclock_pycan           the same on the wall clock
@@ -51,7 +52,9 @@ const char* const ehpt::cli::kBenchHelp =
     "  (e) the trajectory hash across pacers: as fast as possible (twice), real time, lockstep\n"
     "      over socketcand and over LCM udpm (in a private network namespace), and the replay\n"
     "      of a wall-clock session ('ehpt replay', when this build has it)\n"
-    "  the bus exchange: lockstep rate and round trip with 'ehpt ecu' and a stock python-can\n"
+    "  the bus exchange: lockstep periods/s with 'ehpt ecu' (ev_sort1, psecu2_nedc) over\n"
+    "      socketcand and LCM udpm against a TCP and a UDP ping-pong between two processes on\n"
+    "      127.0.0.1 timed here (the transport's floor); rate and round trip of a stock python-can\n"
     "      ECU (tools/pycan_ecu.py); on the wall clock how far apart its two command frames of a\n"
     "      sample came; the own-DBC VCU (examples/own_dbc) on the wall clock and in real time:\n"
     "      stale samples and timeouts (python3-can, python3-canmatrix; said so when missing)\n"
@@ -201,6 +204,8 @@ int ehpt::cli::cmd_bench(const std::vector<std::string>& args) {
       {{"lockstep_lcm", "lockstep, LCM udpm (unshare -n)", "built_in_ecu"}},
       {{"batch_can", "as fast as possible, CAN codec", "can_codec"}},
       {{"lockstep_socketcand", "lockstep, socketcand", "can_codec"}},
+      {{"lockstep_socketcand_psecu2", "lockstep, socketcand (psecu2_nedc)", "exchange"}},
+      {{"lockstep_lcm_psecu2", "lockstep, LCM udpm (psecu2_nedc)", "exchange"}},
       {{"lockstep_pycan", "lockstep, socketcand, python-can ECU (psecu2_nedc)", "exchange"}},
       {{"wallclock_socketcand", "wall clock, socketcand", "wall_clock_session"}},
       {{"wallclock_pycan", "wall clock, socketcand, python-can ECU (psecu2_nedc)", "wall_clock_pycan"}},

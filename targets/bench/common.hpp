@@ -103,8 +103,9 @@ inline constexpr const char* kBenchFormat = "ehpt bench, version 1";
 // The scenario of (c), (d) and (e): the map EV on Sort1, which moves from t = 0 (NEDC stands
 // still for its first 11 s, so a 5 s run would compare trajectories of a car at rest).
 inline constexpr const char* kRtScenario = "ev_sort1";
-inline const std::vector<std::string> kRunDirs = {"batch_1",  "batch_2", "batch_can", "realtime", "lockstep_socketcand", "lockstep_pycan",
-                                           "lockstep_lcm", "wallclock_socketcand", "wallclock_pycan", "wallclock_own_dbc", "realtime_own_dbc", "replay"};
+inline const std::vector<std::string> kRunDirs = {"batch_1",  "batch_2", "batch_can", "realtime", "lockstep_socketcand",
+                                           "lockstep_socketcand_psecu2", "lockstep_pycan", "lockstep_lcm",
+                                           "lockstep_lcm_psecu2", "wallclock_socketcand", "wallclock_pycan", "wallclock_own_dbc", "realtime_own_dbc", "replay"};
 // The files a bench writes for its own runs to read (section_speed, section_runs, section_plan):
 // an earlier bench holds them, and a bench into its folder writes them again.
 inline const std::vector<std::string> kInputFiles = {"psecu2_test.toml", "plan_campaign.toml",

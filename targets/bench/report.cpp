@@ -16,6 +16,27 @@ CvodeErrors cvode_errors(const CvodeRow& r) {
   return {diff(r.rk4.soc_end, r.fine.soc_end), diff(r.cv.soc_end, r.fine.soc_end),
           diff(r.rk4.distance_m, r.fine.distance_m), diff(r.cv.distance_m, r.fine.distance_m)};
 }
+// The lockstep runs against the transport's floor (issue 26): at least half its round trips.
+constexpr double kTargetExchangeFloorRatio = 0.5;
+
+const std::vector<std::pair<std::string, std::string>>& exchange_rows() {
+  static const std::vector<std::pair<std::string, std::string>> rows = {
+      {"lockstep_socketcand", "ehpt ecu, " + std::string(kRtScenario) + ", socketcand"},
+      {"lockstep_socketcand_psecu2", "ehpt ecu, psecu2_nedc, socketcand"},
+      {"lockstep_lcm", "ehpt ecu, " + std::string(kRtScenario) + ", LCM udpm"},
+      {"lockstep_lcm_psecu2", "ehpt ecu, psecu2_nedc, LCM udpm"},
+      {"lockstep_pycan", "tools/pycan_ecu.py (python-can 4.1, Nagle on), psecu2_nedc, socketcand"}};
+  return rows;
+}
+
+// A lockstep run's periods/s over its transport's ping-pong round trips/s (LCM: UDP, else TCP);
+// NaN if either is missing.
+double exchange_floor_ratio(const Bench& b, const SubRun& r) {
+  const PingPong& floor = r.name.rfind("lockstep_lcm", 0) == 0 ? b.udp_floor : b.tcp_floor;
+  if (!r.ok() || !floor.error.empty() || floor.round_trips <= 0 || !std::isfinite(r.samples_per_s)) return NAN;
+  return r.samples_per_s / floor.round_trips_per_s();
+}
+
 }  // namespace
 
 // What an ECU test adds to a psecu2 rk4 step: (test - plain) / plain of the median ns per
@@ -194,26 +215,33 @@ std::string report_text(const Bench& b) {
   rows.push_back({"ehpt ecu (the ECU's process)", "-", "-", "", "not reported (ehpt ecu writes no summary)"});
   s += table({"process", "allocations", "peak RSS MB", "target", ""}, rows, "lrrrl");
 
-  // the lockstep exchange's own rate (from the first command to the last)
-  s += "\n    the lockstep exchange over socketcand on 127.0.0.1: samples answered per second and the round trip\n"
-       "    (sensor frames out -> the sample's command in), from each run's summary.json bus\n";
+  // the lockstep exchange's own rate (from the first command to the last), against the
+  // transport's floor timed in this run
+  const auto floor_text = [](const PingPong& p) {
+    return p.error.empty() ? fmt("%.0f", p.round_trips_per_s()) + " round trips/s" : "not measured (" + p.error + ")";
+  };
+  s += "\n    the lockstep exchange: periods answered per second (one sample out, its command back) and the round\n"
+       "    trip, from each run's summary.json bus; x floor: over a ping-pong of two processes on 127.0.0.1\n"
+       "    timed in this run (one write each way, blocking reads): TCP " + floor_text(b.tcp_floor) + ", UDP " +
+       floor_text(b.udp_floor) + "\n";
   rows.clear();
-  const std::vector<std::array<std::string, 3>> exchange_rows = {
-      {"lockstep_socketcand", "ehpt ecu, " + std::string(kRtScenario), "-"},
-      {"lockstep_pycan", "tools/pycan_ecu.py (python-can 4.1, Nagle on), psecu2_nedc", ">= 2000"}};
-  for (const auto& [name, label, target] : exchange_rows) {
+  for (const auto& [name, label] : exchange_rows()) {
     for (const auto& r : b.runs) {
       if (r.name != name) continue;
+      const double target = name == "lockstep_pycan" ? 2000.0 : kTargetExchangeFloorRatio;
+      const std::string target_text = name == "lockstep_pycan" ? ">= 2000/s" : ">= " + fmt("%.1f", target) + " x floor";
       if (!r.ok()) {
-        rows.push_back({label, "-", "-", "-", target, r.status});
-      } else {
-        rows.push_back({label, fmt("%.0f", r.samples_per_s), fmt("%.0f", r.round_trip_p50_us),
-                        fmt("%.0f", r.round_trip_p99_us), target,
-                        target == "-" ? "" : target_mark(r.samples_per_s >= 2000.0)});
+        rows.push_back({label, "-", "-", "-", "-", target_text, r.status});
+        continue;
       }
+      const double ratio = exchange_floor_ratio(b, r);
+      const bool met = name == "lockstep_pycan" ? r.samples_per_s >= target : ratio >= target;
+      rows.push_back({label, fmt("%.0f", r.samples_per_s), fmt("%.0f", r.round_trip_p50_us),
+                      fmt("%.0f", r.round_trip_p99_us), fmt("%.2f", ratio), target_text,
+                      std::isfinite(ratio) || name == "lockstep_pycan" ? target_mark(met) : "no floor to compare"});
     }
   }
-  s += table({"ECU", "samples/s", "round trip p50 us", "p99 us", "target", ""}, rows, "lrrrrl");
+  s += table({"ECU, transport", "periods/s", "round trip p50 us", "p99 us", "x floor", "target", ""}, rows, "lrrrrrl");
 
   // the python-can ECU on the wall clock: its two command frames of a sample, as the plant
   // read them (resolution: the plant's 1 ms step, when it drains the bus)
@@ -445,7 +473,28 @@ std::string report_json(const Bench& b) {
   j.object("latency", lat);
 
   JsonObject runs;
-  for (const auto& r : b.runs) runs.object(r.name, run_json(r));
+  for (const auto& r : b.runs) {
+    JsonObject one = run_json(r);
+    const double ratio = exchange_floor_ratio(b, r);
+    if (std::isfinite(ratio)) {
+      one.number("floor_ratio", ratio);
+      if (r.name != "lockstep_pycan") one.number("target_floor_ratio", kTargetExchangeFloorRatio);
+    }
+    runs.object(r.name, one);
+  }
+  // the transports' floors the lockstep runs are compared with (floor_ratio)
+  JsonObject floors;
+  for (const auto& [key, p] : {std::pair<const char*, const PingPong*>{"tcp", &b.tcp_floor}, {"udp", &b.udp_floor}}) {
+    JsonObject one;
+    one.text("status", p->error.empty() ? "ok" : p->error);
+    if (p->error.empty()) {
+      one.number("round_trips_per_s", p->round_trips_per_s());
+      one.integer("round_trips", p->round_trips);
+      one.number("seconds", p->seconds);
+    }
+    floors.object(key, one);
+  }
+  j.object("exchange_floors", floors);
   JsonObject ecu;
   ecu.text("status", "not reported (ehpt ecu writes no summary)");
   runs.object("ecu", ecu);

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // `ehpt bench` sections (d) and (e): the sub-runs (allocations, trajectory hashes across pacers).
+#include "targets/bench/pingpong.hpp"
 #include "targets/bench/sections.hpp"
 #include "targets/bench/supervisor.hpp"
 
@@ -101,17 +102,18 @@ void socketcand_run(Bench& b, const std::string& name, bool lockstep, double sec
   if (!stopping()) fail(b, r, "no free port after 3 attempts");
 }
 
-void lcm_run(Bench& b) {
-  SubRun& r = b.run("lockstep_lcm");
+// ehpt plant --lockstep + ehpt ecu over LCM udpm in a network namespace of their own, into DIR/name.
+void lcm_run(Bench& b, const std::string& name, const char* scenario) {
+  SubRun& r = b.run(name);
   const std::string bus = "lcm:udpm://239.255.76.67:7667?ttl=0";
-  std::vector<std::string> plant = {b.exe, "plant", kRtScenario, "--bus", bus, "--lockstep", "--out", b.dir + "/lockstep_lcm",
+  std::vector<std::string> plant = {b.exe, "plant", scenario, "--bus", bus, "--lockstep", "--out", b.dir + "/" + name,
                                     "--quiet", "--ecu-wait-s", "30", "--allow-degraded"};
-  std::vector<std::string> ecu = {b.exe, "ecu", kRtScenario, "--bus", bus, "--quiet", "--idle-timeout-s", "2"};
+  std::vector<std::string> ecu = {b.exe, "ecu", scenario, "--bus", bus, "--quiet", "--idle-timeout-s", "2"};
   for (const auto& a : b.duration_set(b.seconds)) {
     plant.push_back(a);
     ecu.push_back(a);
   }
-  const std::string err = b.logs + "/lockstep_lcm.err";
+  const std::string err = b.logs + "/" + name + ".err";
   const double timeout_s = 120.0 + 2.0 * b.seconds;
   // fork, then a new network namespace in the child: only safe while this process has one
   // thread (it has: nothing here starts one; checked, not assumed)
@@ -130,7 +132,7 @@ void lcm_run(Bench& b) {
       ::dup2(fd, STDERR_FILENO);
       ::close(fd);
     }
-    lcm_in_netns(plant, ecu, b.logs, timeout_s);
+    lcm_in_netns(name, plant, ecu, b.logs, timeout_s);
   }
   ::setpgid(pid, pid);  // also from here, so that killpg works at once
   Child c;
@@ -151,8 +153,17 @@ void lcm_run(Bench& b) {
   }
   Json j;
   std::string why;
-  if (!read_summary(b.dir + "/lockstep_lcm", b.started_at, j, why)) return fail(b, r, why);
+  if (!read_summary(b.dir + "/" + name, b.started_at, j, why)) return fail(b, r, why);
   take_summary(b, r, j);
+}
+
+// The transports' floors (targets/bench/pingpong.hpp), just before the lockstep runs they are
+// compared with. TCP: a PSecu2 sample's seven socketcand frames one way (48 characters each),
+// its two command frames back; UDP: an LCM sensor message one way, a command back (header,
+// channel name and payload). At these sizes the round trip hardly depends on them.
+void floor_runs(Bench& b) {
+  b.tcp_floor = ping_pong(PingPongKind::kTcp, 336, 80, 1.0);
+  if (!stopping()) b.udp_floor = ping_pong(PingPongKind::kUdp, 256, 128, 1.0);
 }
 
 void replay_run(Bench& b) {
@@ -303,15 +314,19 @@ void take_summary(Bench& b, SubRun& r, const Json& j) {
 
 void section_runs(Bench& b) {
   b.progress("(d, e) determinism and allocations: " + std::string(kRtScenario) + ", " + std::to_string(b.seconds) +
-             " s as fast as possible (x3), lockstep over socketcand (ehpt ecu, and a python-can ECU on psecu2_nedc) and LCM; a " + fmt("%.0f", b.wall_clock_s) +
+             " s as fast as possible (x3), the TCP and UDP ping-pong floors, lockstep over socketcand (ehpt ecu on it "
+             "and on psecu2_nedc, and a python-can ECU on psecu2_nedc) and LCM (both); a " + fmt("%.0f", b.wall_clock_s) +
              " s wall-clock session over socketcand (ehpt ecu, and the python-can ECU) and its replay, the own-DBC VCU on "
              "the wall clock and in real time (about " + fmt("%.0f", 4.0 * b.wall_clock_s + 10.0) + " s)");
   batch_run(b, "batch_1", {});
   if (!stopping()) batch_run(b, "batch_2", {});
   if (!stopping()) batch_run(b, "batch_can", {"--set", "vehicle.ecu.codec=can"});
+  if (!stopping()) floor_runs(b);
   if (!stopping()) socketcand_run(b, "lockstep_socketcand", true, b.seconds);
+  if (!stopping()) socketcand_run(b, "lockstep_socketcand_psecu2", true, b.seconds, "psecu2_nedc");
   if (!stopping()) pycan_run(b, "lockstep_pycan", true, b.seconds);
-  if (!stopping()) lcm_run(b);
+  if (!stopping()) lcm_run(b, "lockstep_lcm", kRtScenario);
+  if (!stopping()) lcm_run(b, "lockstep_lcm_psecu2", "psecu2_nedc");
   if (!stopping()) socketcand_run(b, "wallclock_socketcand", false, b.wall_clock_s);
   if (!stopping()) pycan_run(b, "wallclock_pycan", false, b.wall_clock_s);
   if (!stopping()) own_dbc_run(b, "wallclock_own_dbc", false);

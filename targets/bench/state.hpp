@@ -4,6 +4,7 @@
 // reported by targets/bench/report.cpp).
 
 #include "targets/bench/common.hpp"
+#include "targets/bench/pingpong.hpp"
 
 namespace ehpt::bench {
 
@@ -89,6 +90,7 @@ struct Bench {
   long long overruns = -1, missed_ticks = -1, ticks = -1;
   std::vector<std::string> rt_warnings;
   std::vector<SubRun> runs;
+  PingPong tcp_floor, udp_floor;  // the transports' round trips alone (section_runs.cpp)
   bool replay_available = false;
   std::string plan_status = "not run";  // (g)
   int plan_runs = 0;

@@ -103,8 +103,8 @@ bool only_loopback(std::string& seen) {
 
 }  // namespace
 
-[[noreturn]] void lcm_in_netns(const std::vector<std::string>& plant, const std::vector<std::string>& ecu,
-                               const std::string& logs, double timeout_s) {
+[[noreturn]] void lcm_in_netns(const std::string& name, const std::vector<std::string>& plant,
+                               const std::vector<std::string>& ecu, const std::string& logs, double timeout_s) {
   if (::unshare(CLONE_NEWNET) != 0) {
     std::fprintf(stderr, "unshare(CLONE_NEWNET): %s (needs root or user namespaces)\n", std::strerror(errno));
     std::fflush(stderr);
@@ -127,9 +127,9 @@ bool only_loopback(std::string& seen) {
     Child p, e;
     std::string why;
     // in this process's group: the bench ends the whole group
-    if (!p.start(plant, logs + "/lockstep_lcm_plant.out", logs + "/lockstep_lcm_plant.err", why, false)) {
+    if (!p.start(plant, logs + "/" + name + "_plant.out", logs + "/" + name + "_plant.err", why, false)) {
       std::fprintf(stderr, "%s\n", why.c_str());
-    } else if (!e.start(ecu, logs + "/lockstep_lcm_ecu.out", logs + "/lockstep_lcm_ecu.err", why, false)) {
+    } else if (!e.start(ecu, logs + "/" + name + "_ecu.out", logs + "/" + name + "_ecu.err", why, false)) {
       std::fprintf(stderr, "%s\n", why.c_str());
     } else {
       const Outcome po = p.wait(timeout_s);

@@ -118,9 +118,9 @@ int free_port();
 bool listening(int port);
 
 // The forked child: a new network namespace holding only lo, then ehpt plant --lockstep and
-// ehpt ecu over LCM udpm (ttl=0) there. Never returns. Exit 77: no namespace here (stderr
-// says why); else the plant's exit code, or 1.
-[[noreturn]] void lcm_in_netns(const std::vector<std::string>& plant, const std::vector<std::string>& ecu,
-                               const std::string& logs, double timeout_s);
+// ehpt ecu over LCM udpm (ttl=0) there; their output in logs/NAME_plant.* and NAME_ecu.*.
+// Never returns. Exit 77: no namespace here (stderr says why); else the plant's exit code, or 1.
+[[noreturn]] void lcm_in_netns(const std::string& name, const std::vector<std::string>& plant,
+                               const std::vector<std::string>& ecu, const std::string& logs, double timeout_s);
 
 }  // namespace ehpt::bench

@@ -78,12 +78,32 @@ else:
 
 # (d): allocations counted (whole numbers) wherever the run ran
 runs = b["runs"]
-must_run = ("batch_1", "batch_2", "realtime", "batch_can", "lockstep_socketcand", "wallclock_socketcand")
+must_run = ("batch_1", "batch_2", "realtime", "batch_can", "lockstep_socketcand", "lockstep_socketcand_psecu2",
+            "wallclock_socketcand")
 for name in must_run:
     check(runs[name]["status"] == "ok", "%s: %s" % (name, runs[name]["status"]))
-if not runs["lockstep_lcm"]["status"] == "ok":
-    check(runs["lockstep_lcm"]["status"].startswith("not run"), "lockstep_lcm: " + runs["lockstep_lcm"]["status"])
-    print("note: lockstep_lcm: " + runs["lockstep_lcm"]["status"])
+for name in ("lockstep_lcm", "lockstep_lcm_psecu2"):
+    if not runs[name]["status"] == "ok":
+        check(runs[name]["status"].startswith("not run"), name + ": " + runs[name]["status"])
+        print("note: %s: %s" % (name, runs[name]["status"]))
+
+# the lockstep exchange against the transports' floors, timed in the same run: each floor
+# measured, and each lockstep run's ratio its periods/s over that floor (recomputed here)
+floors = b["exchange_floors"]
+for kind in ("tcp", "udp"):
+    f = floors[kind]
+    if check(f["status"] == "ok", "exchange_floors.%s: %s" % (kind, f["status"])):
+        check(positive(f["round_trips_per_s"]) and whole(f["round_trips"]) and f["round_trips"] > 0,
+              "exchange_floors.%s figures" % kind)
+for name in ("lockstep_socketcand", "lockstep_socketcand_psecu2", "lockstep_lcm", "lockstep_lcm_psecu2"):
+    r = runs[name]
+    if r["status"] != "ok":
+        continue
+    f = floors["udp" if name.startswith("lockstep_lcm") else "tcp"]
+    want = r["samples_per_s"] / f["round_trips_per_s"]
+    check(positive(r.get("floor_ratio")) and abs(r["floor_ratio"] - want) <= 1e-9 * want,
+          "%s: floor_ratio %r, periods/s over the floor %r" % (name, r.get("floor_ratio"), want))
+    check(r.get("target_floor_ratio") == 0.5, name + ": target_floor_ratio")
 if runs["replay"]["status"] != "ok":
     check(runs["replay"]["status"] == "not available in this build", "replay: " + runs["replay"]["status"])
     print("note: replay: " + runs["replay"]["status"])
