@@ -5,6 +5,8 @@
 #include <cstdio>
 
 #include "targets/bench/sections.hpp"
+
+#include "plant/battery_rc.hpp"
 #include "targets/bench/supervisor.hpp"
 
 namespace ehpt::bench {
@@ -90,27 +92,45 @@ bool timed_run(const ehpt::hil::Scenario& sc, double& wall_s, ehpt::hil::RunFigu
 }
 
 // The latency floor of an RK4 step. Each of its four stages solves the battery's node on the
-// result of the stage before: a square root, then the current P / V, then the next stage's
-// voltage from it. So no step can take less than four of these dependent chains, whatever
-// else it does in parallel. This loop is that chain alone, measured in the same process and
-// run as the steps it is compared with (best of reps, 5 million steps each).
+// result of the stage before: the stage's state (x + c h k), the terminal voltage (a square
+// root), the current P / V, the EMF's and v_rc's derivatives from it, and the next stage's
+// state from those. So no step can take less than four of these dependent chains, whatever
+// else it does in parallel. This loop is that chain alone, through the plant's own
+// BatteryRc::terminal (inlined, as in the step), with RK4's stage weights, measured in the
+// same process and run as the steps it is compared with (best of reps, 5 million steps each).
+// A bare sqrt -> divide chain (what this loop was before issue 26's item 1) leaves out the
+// stage update and the derivatives, about a third of the chain.
 double floor_ns_per_step(int reps) {
   constexpr std::int64_t kSteps = 5'000'000;
+  constexpr double h = 1e-3;  // s, the step of (a)
+  ehpt::plant::BatteryRcParams params;  // a pack of the EV's size
+  params.cells_series = 96;
+  params.strings_parallel = 4;
+  const ehpt::plant::BatteryRc battery(params);
   double best = INFINITY;
   double sink = 0.0;
   for (int k = 0; k < std::max(1, reps); ++k) {
-    double v = 400.0;  // V
-    const double p = 3.0e4, r = 0.05;  // W, ohm: the constant-power node v_t = (v + sqrt(v^2 - 4 r p)) / 2
+    double emf = battery.constants().emf_initial_V, v_rc = 0.0;
     const auto t0 = Clock::now();
     for (std::int64_t n = 0; n < kSteps; ++n) {
+      // +-30 kW, a second each way: the pack stays near its start (the sign is no part of the chain)
+      const double load_W = (n / 1000) % 2 == 0 ? 3.0e4 : -3.0e4;
+      double k_emf = 0.0, k_vrc = 0.0, sum_emf = 0.0, sum_vrc = 0.0;
       for (int stage = 0; stage < 4; ++stage) {
-        const double v_t = 0.5 * (v + std::sqrt(v * v - 4.0 * r * p));
-        const double i = p / v_t;
-        v = 400.0 - 1e-3 * i;  // the next stage's input depends on this one's current
+        const double c = stage == 0 ? 0.0 : stage == 3 ? h : 0.5 * h;
+        const double emf_s = emf + c * k_emf, v_rc_s = v_rc + c * k_vrc;
+        const ehpt::plant::BatteryTerminal t = battery.terminal(emf_s, v_rc_s, load_W);
+        k_emf = battery.demf_dt(t);
+        k_vrc = battery.dvrc_dt(t, v_rc_s);
+        const double w = stage == 0 || stage == 3 ? 1.0 : 2.0;
+        sum_emf += w * k_emf;
+        sum_vrc += w * k_vrc;
       }
+      emf += h / 6.0 * sum_emf;
+      v_rc += h / 6.0 * sum_vrc;
     }
     best = std::min(best, 1e9 * seconds_since(t0) / static_cast<double>(kSteps));
-    sink += v;
+    sink += emf;
   }
   // the chain's result is used: the loop cannot be dropped
   if (!(sink > 0.0)) std::fprintf(stderr, "ehpt bench: the floor loop gave %g\n", sink);
