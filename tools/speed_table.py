@@ -74,7 +74,7 @@ def rows_of(bench):
 
     speed = bench.get("speed", {})
     reps = speed.get("repetitions")
-    add("the latency floor of an RK4 step: four dependent sqrt -> divide chains, ns", "speed.floor_ns_per_step", 1)
+    add("the latency floor of an RK4 step: the battery's four dependent stage chains, ns", "speed.floor_ns_per_step", 1)
     for vehicle, solvers in speed.get("vehicles", {}).items():
         for solver, run in solvers.items():
             if not isinstance(run, dict) or run.get("status") != "ok":

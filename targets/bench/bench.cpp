@@ -43,7 +43,7 @@ const char* const ehpt::cli::kBenchHelp =
     "their targets, never asserted.\n"
     "  (a) ns per step of ev_nedc, evpm_nedc, evam_nedc, psecu2_nedc x rk4, implicit-euler at\n"
     "      1 ms, in this process (median of 3 whole runs, min and max; --quick: 1), RK4's next\n"
-    "      to the latency floor of a step (four dependent sqrt -> divide chains, timed here)\n"
+    "      to the latency floor of a step (its battery's four dependent stage chains, timed here)\n"
     "  (b) the real-time factor of each vehicle on its cycle (from a)\n"
     "  (c) wake-up latency of 'ehpt run ev_sort1 --realtime' next to cyclictest's (rt-tests),\n"
     "      same period (1 ms), priority, CPU and duration; overruns; peak RSS\n"

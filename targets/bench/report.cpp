@@ -144,7 +144,7 @@ std::string report_text(const Bench& b) {
               "IE/RK4", "target", ""},
              rows, "llrrrrrrrrrl");
   s += "  floor: " + fmt("%.1f", b.floor_ns_per_step) +
-       " ns per step, four dependent sqrt -> divide chains (an RK4 step's battery solves), timed in this run\n";
+       " ns per step: the battery's four dependent stage chains (state, sqrt, P / V, derivatives), timed in this run\n";
   if (const double f = test_overhead(b); std::isfinite(f)) {
     s += "  an ECU test (a fault, four expectations at every step) costs " + fmt("%.1f", 100.0 * f) +
          " % of a psecu2_nedc rk4 step (target <= 10 %)\n";
@@ -409,7 +409,7 @@ std::string report_json(const Bench& b) {
   speed.text("status", b.speed_status);
   speed.number("step_s", 0.001);
   speed.integer("repetitions", b.reps);
-  // the latency floor of an RK4 step (four dependent sqrt -> divide chains), this run
+  // the latency floor of an RK4 step (the battery's four dependent stage chains), this run
   speed.number("floor_ns_per_step", b.floor_ns_per_step);
   JsonObject by_vehicle;
   std::map<std::string, JsonObject> vehicles;
